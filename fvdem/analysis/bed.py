@@ -1,0 +1,59 @@
+"""Packed-bed observables: solids fraction of the bed core and bed height."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..dem.particles import spherocylinder_volume
+
+
+def particle_top(position, axis, radius, half_length):
+    """Highest point of each particle [m] (centre + radius + half_length |a_z|)."""
+    return position[:, 2] + radius + half_length * np.abs(axis[:, 2])
+
+
+def bed_top(position, axis, radius, half_length, quantile=0.99):
+    """Height [m] below which ``quantile`` of the particle tops lie (robust to stray particles)."""
+    return float(np.quantile(particle_top(position, axis, radius, half_length), quantile))
+
+
+def core_solids_fraction(position, axis, radius, half_length, lower, upper, periodic, floor=None, top=None,
+                         wall_margin=None):
+    """Solids fraction of the bed core: particle volume whose centres lie in the core region divided
+    by the region's volume. The core excludes ``wall_margin`` [m] (default 2 particle lengths) next to
+    side walls and the bottom and top 20 % of the bed, where packing is ordered or loose.
+    """
+    lower = np.asarray(lower, float)
+    upper = np.asarray(upper, float)
+    extent = float(np.max(2.0 * (radius + half_length)))
+    margin = 2.0 * extent if wall_margin is None else wall_margin
+    floor = lower[2] if floor is None else floor
+    top = bed_top(position, axis, radius, half_length) if top is None else top
+    lo = lower.copy()
+    hi = upper.copy()
+    for d in range(2):
+        if not periodic[d]:
+            lo[d] += margin
+            hi[d] -= margin
+    height = top - floor
+    lo[2] = floor + 0.2 * height
+    hi[2] = floor + 0.8 * height
+    if np.any(hi <= lo):
+        return float("nan")
+    inside = np.all((position >= lo) & (position < hi), axis=1)
+    volume = spherocylinder_volume(radius[inside], half_length[inside]).sum()
+    return float(volume / np.prod(hi - lo))
+
+
+def packed_bed_summary(particles, box) -> dict:
+    """Bed top, core solids fraction and the equivalent packed height (solid volume / (area * fraction))."""
+    args = (particles.position, particles.axis, particles.radius, particles.half_length)
+    top = bed_top(*args)
+    fraction = core_solids_fraction(*args, box.lower, box.upper, box.periodic, top=top)
+    area = float(np.prod(np.asarray(box.upper[:2]) - np.asarray(box.lower[:2])))
+    solid = float(spherocylinder_volume(particles.radius, particles.half_length).sum())
+    return {
+        "bed_top": top,
+        "solids_fraction": fraction,
+        "bed_height": solid / (area * fraction) if fraction > 0 else float("nan"),
+        "mean_solids_fraction_below_top": solid / (area * (top - box.lower[2])),
+    }

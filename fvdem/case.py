@@ -1,0 +1,455 @@
+"""Case files: TOML -> validated, frozen dataclasses.
+
+A case file has one table per part of the model (``[domain]``, ``[particles]``,
+``[particles.insertion]``, ``[contact]``, ``[time]``, ``[output]``, ``[run]``). Every value is
+checked before anything runs: unknown keys, wrong types, units and ranges are all collected and
+reported together as ``CaseError`` with the key path, the value and what is allowed.
+
+Quantities with a dimension are SI numbers, or strings with a unit: ``diameter = "5.3 mm"``.
+The fully resolved case (defaults included) can be written back as TOML (``to_toml``).
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from dataclasses import MISSING, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+from .dem.contact_law import collision_time
+from .dem.particles import spherocylinder_volume
+
+# --------------------------------------------------------------------------- units
+UNITS = {
+    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6},
+    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6},
+    "density": {"kg/m^3": 1.0, "kg/m3": 1.0, "g/cm^3": 1e3, "g/cm3": 1e3},
+    "stiffness": {"N/m": 1.0, "kN/m": 1e3, "N/mm": 1e3},
+    "velocity": {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3},
+    "acceleration": {"m/s^2": 1.0, "m/s2": 1.0},
+}
+
+
+class CaseError(ValueError):
+    """Invalid case input. ``problems`` lists one message per offending key."""
+
+    def __init__(self, problems):
+        self.problems = list(problems)
+        super().__init__("\n".join(self.problems))
+
+
+def spec(default=MISSING, *, kind="float", unit=None, gt=None, ge=None, lt=None, le=None, choices=None,
+         optional=False, doc=""):
+    """A dataclass field with its validation rule in the metadata."""
+    meta = dict(kind=kind, unit=unit, gt=gt, ge=ge, lt=lt, le=le, choices=choices, optional=optional, doc=doc)
+    if isinstance(default, (list, dict)):
+        return field(default_factory=lambda: default, metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+def section(cls, doc=""):
+    return field(default_factory=cls, metadata=dict(kind="section", doc=doc))
+
+
+# --------------------------------------------------------------------------- schema
+@dataclass(frozen=True)
+class DomainConfig:
+    lower: tuple = spec((0.0, 0.0, 0.0), kind="vec3", unit="length", doc="lower corner of the box [m]")
+    upper: tuple = spec((0.15, 0.15, 1.05), kind="vec3", unit="length", doc="upper corner of the box [m]")
+    periodic: tuple = spec((False, False, False), kind="bool3",
+                           doc="periodic axes (x, y, z); the other axes have walls on both faces")
+    gravity: tuple = spec((0.0, 0.0, -9.81), kind="vec3", unit="acceleration", doc="gravity [m/s^2]")
+
+
+@dataclass(frozen=True)
+class InsertionConfig:
+    lower: tuple | None = spec(None, kind="vec3", unit="length", optional=True,
+                               doc="insertion region lower corner [m] (default: domain)")
+    upper: tuple | None = spec(None, kind="vec3", unit="length", optional=True,
+                               doc="insertion region upper corner [m] (default: domain)")
+    orientation: str = spec("random", kind="str", choices=("random", "vertical", "horizontal"),
+                            doc="axis orientation of inserted spherocylinders")
+    gap: float = spec(0.0, unit="length", ge=0.0, doc="extra clearance between inserted particles [m]")
+    seed: int = spec(1, kind="int", ge=0, doc="random seed")
+
+
+@dataclass(frozen=True)
+class ParticlesConfig:
+    shape: str = spec("sphere", kind="str", choices=("sphere", "spherocylinder"))
+    count: int = spec(1000, kind="int", gt=0, doc="number of particles")
+    diameter: float = spec(5.3e-3, unit="length", gt=0.0, doc="sphere or cylinder diameter [m]")
+    length: float | None = spec(None, unit="length", gt=0.0, optional=True,
+                                doc="spherocylinder length including caps [m] (> diameter)")
+    density: float = spec(1442.0, unit="density", gt=0.0, doc="particle density [kg/m^3]")
+    colour: str = spec("by_height", kind="str", choices=("by_height", "single"),
+                       doc="tracer colour: 'by_height' gives the lower half 0 and the upper half 1")
+    initial_state: str | None = spec(None, kind="str", optional=True,
+                                     doc="start from a saved state (.npz written by a run), path relative "
+                                         "to the case file; insertion is then skipped")
+    insertion: InsertionConfig = section(InsertionConfig)
+
+    @property
+    def radius(self) -> float:
+        return 0.5 * self.diameter
+
+    @property
+    def half_length(self) -> float:
+        """Half the cylindrical part [m] (0 for spheres)."""
+        return 0.0 if self.shape == "sphere" else 0.5 * (self.length - self.diameter)
+
+    @property
+    def volume(self) -> float:
+        return float(spherocylinder_volume(self.radius, self.half_length))
+
+    @property
+    def mass(self) -> float:
+        return self.density * self.volume
+
+
+@dataclass(frozen=True)
+class ContactConfig:
+    normal_stiffness: float = spec(2.0e4, unit="stiffness", gt=0.0, doc="linear normal spring k_n [N/m]")
+    restitution: float = spec(0.43, gt=0.0, le=1.0, doc="coefficient of restitution e in (0, 1]")
+    friction: float = spec(0.46, ge=0.0, doc="sliding friction coefficient mu")
+    rolling_friction: float = spec(0.46, ge=0.0, doc="rolling friction coefficient mu_r (CDT model)")
+    tangential_stiffness_ratio: float = spec(2.0 / 7.0, gt=0.0, doc="k_t / k_n")
+    tangential_damping_ratio: float = spec(1.0, ge=0.0, doc="eta_t / eta_n")
+    neighbour_skin: float | None = spec(None, unit="length", gt=0.0, optional=True,
+                                        doc="neighbour-list skin [m] (default: 1/4 of the smallest diameter)")
+
+
+@dataclass(frozen=True)
+class TimeConfig:
+    dem_step: float = spec(1.0e-5, unit="time", gt=0.0, doc="DEM time step [s]")
+    end: float = spec(0.1, unit="time", gt=0.0, doc="simulated end time [s]")
+    stop_when_settled: bool = spec(False, kind="bool", doc="end early once the bed is at rest")
+    settled_speed: float = spec(0.01, unit="velocity", gt=0.0,
+                                doc="'at rest' means every particle slower than this [m/s]")
+    min_time: float = spec(0.0, unit="time", ge=0.0, doc="never stop as settled before this time [s]")
+
+
+@dataclass(frozen=True)
+class OutputConfig:
+    snapshot_interval: float = spec(0.05, unit="time", gt=0.0, doc="particle VTU snapshots every [s]")
+    timeseries_interval: float = spec(1.0e-3, unit="time", gt=0.0, doc="timeseries.csv rows every [s]")
+    checkpoint_interval: float = spec(0.1, unit="time", gt=0.0, doc="checkpoints every [s]")
+    vtk: bool = spec(True, kind="bool", doc="write ParaView snapshots")
+    progress: bool = spec(True, kind="bool", doc="show a progress bar")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    threads: int = spec(0, kind="int", ge=0, doc="numba threads (0: all cores)")
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str = spec("case", kind="str", doc="case name (default output folder runs/<name>)")
+    description: str = spec("", kind="str")
+    domain: DomainConfig = section(DomainConfig)
+    particles: ParticlesConfig = section(ParticlesConfig)
+    contact: ContactConfig = section(ContactConfig)
+    time: TimeConfig = section(TimeConfig)
+    output: OutputConfig = section(OutputConfig)
+    run: RunConfig = section(RunConfig)
+    source: str | None = field(default=None, compare=False, metadata=dict(kind="internal"))
+
+    def resolve_path(self, relative: str) -> Path:
+        """A path from the case file, relative to the case file's folder."""
+        path = Path(relative)
+        if path.is_absolute() or self.source is None:
+            return path
+        return Path(self.source).parent / path
+
+    def neighbour_skin(self) -> float:
+        return self.contact.neighbour_skin or 0.25 * self.particles.diameter
+
+    def collision_time(self) -> float:
+        """Binary collision time [s] of two particles (reduced mass m/2)."""
+        return collision_time(self.contact.normal_stiffness, 0.5 * self.particles.mass, self.contact.restitution)
+
+
+# --------------------------------------------------------------------------- parsing
+def _describe_rule(meta) -> str:
+    parts = []
+    if meta.get("choices"):
+        return "one of " + ", ".join(repr(c) for c in meta["choices"])
+    kinds = {"float": "a number", "int": "an integer", "bool": "true or false", "str": "a string",
+             "vec3": "a list of 3 numbers", "bool3": "a list of 3 booleans"}
+    parts.append(kinds[meta["kind"]])
+    for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
+        if meta.get(key) is not None:
+            parts.append(f"{sym} {meta[key]:g}")
+    if meta.get("unit"):
+        parts.append(f"in {'/'.join(UNITS[meta['unit']])} (plain numbers are SI)")
+    return " ".join(parts)
+
+
+def _number(value, meta, path, problems):
+    """A float in SI from a number or a 'value unit' string; None (and a problem) if invalid."""
+    unit = meta.get("unit")
+    if isinstance(value, bool):
+        problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+        return None
+    if isinstance(value, (int, float)):
+        number = float(value)
+    elif isinstance(value, str) and unit is not None:
+        text = value.strip().split(None, 1)
+        try:
+            magnitude = float(text[0])
+        except (ValueError, IndexError):
+            problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+            return None
+        symbol = text[1].strip() if len(text) > 1 else ""
+        if symbol not in UNITS[unit]:
+            problems.append(f"{path} = {value!r}: unit {symbol!r} is not a {unit} unit; allowed: "
+                            + ", ".join(UNITS[unit]))
+            return None
+        number = magnitude * UNITS[unit][symbol]
+    else:
+        problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+        return None
+    if not math.isfinite(number):
+        problems.append(f"{path} = {value!r}: must be finite")
+        return None
+    return number
+
+
+def _check_range(number, meta, path, raw, problems):
+    for key, ok in (("gt", lambda a, b: a > b), ("ge", lambda a, b: a >= b), ("lt", lambda a, b: a < b),
+                    ("le", lambda a, b: a <= b)):
+        bound = meta.get(key)
+        if bound is not None and not ok(number, bound):
+            problems.append(f"{path} = {raw!r}: out of range; allowed: {_describe_rule(meta)}")
+            return
+
+
+def _convert(value, meta, path, problems):
+    kind = meta["kind"]
+    if value is None:
+        return None
+    if kind == "float":
+        number = _number(value, meta, path, problems)
+        if number is not None:
+            _check_range(number, meta, path, value, problems)
+        return number
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+            return None
+        _check_range(value, meta, path, value, problems)
+        return value
+    if kind == "bool":
+        if not isinstance(value, bool):
+            problems.append(f"{path} = {value!r}: expected true or false")
+            return None
+        return value
+    if kind == "str":
+        if not isinstance(value, str):
+            problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+            return None
+        if meta.get("choices") and value not in meta["choices"]:
+            problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+            return None
+        return value
+    if kind in ("vec3", "bool3"):
+        if not isinstance(value, (list, tuple)) or len(value) != 3:
+            problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+            return None
+        item_meta = dict(meta, kind="float" if kind == "vec3" else "bool")
+        items = [_convert(v, item_meta, f"{path}[{k}]", problems) for k, v in enumerate(value)]
+        return None if any(v is None for v in items) else tuple(items)
+    raise AssertionError(kind)
+
+
+def _build(cls, table, path, problems):
+    if not isinstance(table, dict):
+        problems.append(f"{path or 'case'} = {table!r}: expected a table")
+        return cls()
+    known = {f.name: f for f in fields(cls) if f.metadata.get("kind") != "internal"}
+    for key in table:
+        if key not in known:
+            where = f"{path}.{key}" if path else key
+            close = difflib.get_close_matches(key, known, n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            problems.append(f"{where}: unknown key{hint}; allowed keys here: {', '.join(known)}")
+    values = {}
+    for name, f in known.items():
+        where = f"{path}.{name}" if path else name
+        meta = f.metadata
+        if meta["kind"] == "section":
+            sub_cls = f.default_factory
+            values[name] = _build(sub_cls, table.get(name, {}), where, problems)
+            continue
+        if name not in table:
+            continue
+        converted = _convert(table[name], meta, where, problems)
+        if converted is not None:
+            values[name] = converted
+    return cls(**values)
+
+
+def _cross_checks(case: Case, problems: list) -> None:
+    p = case.particles
+    lower, upper = case.domain.lower, case.domain.upper
+    if any(u <= lo for lo, u in zip(lower, upper)):
+        problems.append(f"domain.upper = {list(upper)}: must exceed domain.lower = {list(lower)} on every axis")
+        return
+    if p.shape == "spherocylinder":
+        if p.length is None:
+            problems.append("particles.length: required for shape 'spherocylinder' (length including caps, m)")
+            return
+        if p.length <= p.diameter:
+            problems.append(f"particles.length = {p.length:g}: must exceed particles.diameter = {p.diameter:g} "
+                            "(a length equal to the diameter is a sphere)")
+            return
+    elif p.length is not None:
+        problems.append(f"particles.length = {p.length:g}: only for shape 'spherocylinder'; remove it for spheres")
+        return
+    box_volume = math.prod(u - lo for lo, u in zip(lower, upper))
+    solid = p.count * p.volume
+    if solid > 0.64 * box_volume:
+        problems.append(f"particles.count = {p.count}: {p.count} particles of {p.volume:.4g} m^3 fill "
+                        f"{solid / box_volume:.1%} of the domain; at most 64 % (random close packing) fits")
+    extent = p.diameter + 2 * p.half_length
+    for d, axis in enumerate("xyz"):
+        if upper[d] - lower[d] < extent:
+            problems.append(f"domain: the box is {upper[d] - lower[d]:g} m along {axis}, narrower than one "
+                            f"particle ({extent:g} m)")
+    if p.initial_state is None:
+        ins = p.insertion
+        lo = ins.lower or lower
+        hi = ins.upper or upper
+        if any(h <= l for l, h in zip(lo, hi)):
+            problems.append(f"particles.insertion.upper = {list(hi)}: must exceed the lower corner {list(lo)}")
+        else:
+            region = math.prod(h - l for l, h in zip(lo, hi))
+            if solid > 0.35 * region:
+                problems.append(f"particles.insertion: {p.count} particles fill {solid / region:.1%} of the "
+                                "insertion region; random insertion reaches at most 35 %: enlarge the region")
+            if any(l < dl - 1e-12 or h > dh + 1e-12 for l, h, dl, dh in zip(lo, hi, lower, upper)):
+                problems.append(f"particles.insertion: region {list(lo)}-{list(hi)} must lie inside the domain")
+    reach = 2.0 * (p.radius + p.half_length) + case.neighbour_skin()
+    for d, axis in enumerate("xyz"):
+        if case.domain.periodic[d] and upper[d] - lower[d] < 3.0 * reach:
+            problems.append(f"domain.periodic: the periodic box is {upper[d] - lower[d]:g} m along {axis}; it must "
+                            f"be at least 3 x the neighbour reach {reach:.4g} m")
+    tc = case.collision_time()
+    if case.time.dem_step > tc / 10.0:
+        problems.append(f"time.dem_step = {case.time.dem_step:.3g}: DEM time step {case.time.dem_step:.3g} s exceeds "
+                        f"1/10 of the collision time {tc:.3g} s (k_n = {case.contact.normal_stiffness:g} N/m, "
+                        f"particle mass {p.mass:.3g} kg); use at most {tc / 10.0:.3g} s")
+    for key in ("snapshot_interval", "timeseries_interval", "checkpoint_interval"):
+        value = getattr(case.output, key)
+        if value < case.time.dem_step:
+            problems.append(f"output.{key} = {value:g}: shorter than the DEM time step {case.time.dem_step:g} s")
+
+
+def _set_path(table: dict, dotted: str, value: Any) -> None:
+    keys = dotted.split(".")
+    node = table
+    for key in keys[:-1]:
+        node = node.setdefault(key, {})
+        if not isinstance(node, dict):
+            raise CaseError([f"--set {dotted}: '{key}' is not a table"])
+    node[keys[-1]] = value
+
+
+def parse_override(text: str):
+    """``'a.b=value'`` -> ``('a.b', value)`` with value parsed as TOML (bare words as strings)."""
+    if "=" not in text:
+        raise CaseError([f"--set {text!r}: expected KEY=VALUE, e.g. time.end=0.5"])
+    key, raw = text.split("=", 1)
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    return key.strip(), value
+
+
+def case_from_dict(table: dict, source: str | None = None) -> Case:
+    problems: list[str] = []
+    case = _build(Case, table, "", problems)
+    if not problems:
+        _cross_checks(case, problems)
+    if problems:
+        raise CaseError(problems)
+    return replace(case, source=source)
+
+
+def load_case(path, overrides: dict | None = None) -> Case:
+    """Read and validate a TOML case file. ``overrides`` maps dotted keys to values
+    (``{"time.end": 0.5}``) and is applied before validation. Raises ``CaseError``."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            table = tomllib.load(fh)
+    except FileNotFoundError:
+        raise CaseError([f"{path}: no such case file"]) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError([f"{path}: not valid TOML: {exc}"]) from None
+    for key, value in (overrides or {}).items():
+        _set_path(table, key, value)
+    return case_from_dict(table, source=str(path))
+
+
+# --------------------------------------------------------------------------- writing
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(value)
+
+
+def to_toml(case: Case) -> str:
+    """The fully resolved case as TOML (unset optional values are omitted)."""
+    lines = ["# fully resolved case written by fvdem (defaults included, SI units)"]
+
+    def emit(obj, prefix):
+        scalars = [(f.name, getattr(obj, f.name)) for f in fields(obj)
+                   if f.metadata.get("kind") not in ("section", "internal")]
+        for name, value in scalars:
+            if value is not None:
+                lines.append(f"{name} = {_toml_value(value)}")
+        for f in fields(obj):
+            if f.metadata.get("kind") == "section":
+                lines.append("")
+                lines.append(f"[{prefix}{f.name}]")
+                emit(getattr(obj, f.name), f"{prefix}{f.name}.")
+
+    emit(case, "")
+    return "\n".join(lines) + "\n"
+
+
+def schema_reference() -> str:
+    """Markdown reference of every case key, generated from the dataclasses."""
+    out = []
+
+    def walk(cls, prefix):
+        rows = []
+        for f in fields(cls):
+            meta = f.metadata
+            if meta.get("kind") == "internal":
+                continue
+            if meta.get("kind") == "section":
+                walk(f.default_factory, f"{prefix}{f.name}.")
+                continue
+            default = f.default if f.default is not MISSING else f.default_factory()
+            rows.append(f"| `{prefix}{f.name}` | {_toml_value(default) if default is not None else '(auto)'} | "
+                        f"{_describe_rule(meta)} | {meta.get('doc', '')} |")
+        if rows:
+            out.append(f"\n### `[{prefix.rstrip('.') or 'top level'}]`\n")
+            out.append("| key | default | allowed | meaning |\n|---|---|---|---|")
+            out.extend(rows)
+
+    walk(Case, "")
+    return "\n".join(out) + "\n"
+
+
+__all__ = ["Case", "CaseError", "load_case", "case_from_dict", "to_toml", "parse_override", "schema_reference"]

@@ -1,0 +1,101 @@
+"""Command line: ``fvdem run | check | info | schema``.
+
+Input problems (case file, options, output folder) exit with code 2 and a message, never a
+traceback; a run that becomes unstable exits with code 3 and the cause.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from .case import CaseError, load_case, parse_override, schema_reference
+
+
+def _overrides(pairs):
+    return dict(parse_override(text) for text in pairs or [])
+
+
+def _fail(message: str, code: int = 2) -> int:
+    print(f"fvdem: error: {message}", file=sys.stderr)
+    return code
+
+
+def cmd_check(args) -> int:
+    case = load_case(args.case, _overrides(args.set))
+    print(f"{args.case}: OK ({case.particles.count} {case.particles.shape}s, end {case.time.end:g} s, "
+          f"DEM step {case.time.dem_step:g} s = collision time / {case.collision_time() / case.time.dem_step:.1f})")
+    return 0
+
+
+def cmd_run(args) -> int:
+    from .simulation import Simulation
+    case = load_case(args.case, _overrides(args.set))
+    out = Path(args.out) if args.out else Path("runs") / case.name
+    sim = Simulation(case, out, overwrite=args.overwrite, resume=args.resume,
+                     progress=False if args.no_progress else None, threads=args.threads)
+    summary = sim.run()
+    if sim.stopped_early:
+        print(f"stopped at t = {sim.time:.6g} s; continue with: fvdem run {args.case} --out {out} --resume",
+              file=sys.stderr)
+        return 130
+    keys = ("simulated_time", "steps", "wall_seconds", "bed_height", "solids_fraction", "contacts_per_particle",
+            "max_overlap_over_diameter")
+    print(json.dumps({k: summary[k] for k in keys}))
+    print(f"results in {out}/ (particles.pvd for ParaView, timeseries.csv, summary.json)")
+    return 0
+
+
+def cmd_info(args) -> int:
+    import numba
+    import numpy
+    from . import __version__
+    print(json.dumps({"fvdem": __version__, "numpy": numpy.__version__, "numba": numba.__version__,
+                      "threads_available": numba.config.NUMBA_NUM_THREADS,
+                      "threading_layer": numba.config.THREADING_LAYER}, indent=2))
+    return 0
+
+
+def cmd_schema(args) -> int:
+    print(schema_reference())
+    return 0
+
+
+def make_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="fvdem", description="CFD-DEM for fluidized beds")
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="run a case file")
+    run.add_argument("case")
+    run.add_argument("--out", help="output folder (default runs/<case name>)")
+    run.add_argument("--overwrite", action="store_true", help="replace an existing non-empty output folder")
+    run.add_argument("--resume", action="store_true", help="continue from the output folder's checkpoint")
+    run.add_argument("--threads", type=int, help="numba threads (default: case run.threads)")
+    run.add_argument("--no-progress", action="store_true")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case value")
+    run.set_defaults(func=cmd_run)
+    check = sub.add_parser("check", help="validate a case file without running it")
+    check.add_argument("case")
+    check.add_argument("--set", action="append", metavar="KEY=VALUE")
+    check.set_defaults(func=cmd_check)
+    sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)
+    sub.add_parser("schema", help="print the case-file reference (Markdown)").set_defaults(func=cmd_schema)
+    return parser
+
+
+def main(argv=None) -> int:
+    from .simulation import OutputError
+    from .dem.system import SimulationError
+    args = make_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except CaseError as exc:
+        return _fail("invalid case:\n  " + "\n  ".join(exc.problems))
+    except OutputError as exc:
+        return _fail(str(exc))
+    except SimulationError as exc:
+        return _fail(f"simulation stopped: {exc}", 3)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,147 @@
+"""Contact force law: linear spring-dashpot normal force, tangential spring with history and
+Coulomb limit, constant-directional-torque rolling friction (seed 000, Eqs. 3-5, Table 5).
+
+Each sub-model is a small pure function; ``contact_force`` evaluates them in one visible order:
+
+1. normal:      ``F_n = (k_n delta - eta_n v_n) n``                         (Eq. 3)
+2. damping:     ``eta_n = 2 zeta sqrt(m* k_n)``, ``zeta = -ln e / sqrt(pi^2 + ln^2 e)`` so that a
+                free binary collision rebounds with restitution ``e`` exactly (linear oscillator)
+3. tangential:  ``delta_t = int v_t dt`` since first contact, rotated into the current tangent
+                plane (length kept); ``F_t = -k_t delta_t - eta_t v_t``; if ``|F_t| > mu |F_n|``
+                then ``F_t`` is scaled to ``mu |F_n|`` and ``delta_t`` truncated to
+                ``-(F_t + eta_t v_t) / k_t`` (Eqs. 4-5)
+4. rolling:     constant directional torque ``T_r = -mu_r R* |F_n| w_roll / |w_roll|``, ``w_roll`` the
+                relative angular velocity projected on the tangent plane, ``R*`` the reduced radius.
+                Seed 000 lists ``mu_r = 0.46`` without a model; this is the standard CDT model
+                (Ai et al. 2011, model A). The torque is capped so that it cannot reverse the
+                relative rolling within one step (``|T_r| <= I* |w_roll| / dt``): no chattering.
+
+The normal force is not clipped at zero (the damping can pull during rebound), which is the model
+for which the restitution formula is exact.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# indices into the contact parameter vector passed to kernels
+K_N, K_T, ZETA_N, ETA_T_OVER_ETA_N, FRICTION, ROLLING_FRICTION, DT = range(7)
+
+
+def damping_ratio(restitution: float) -> float:
+    """Damping ratio ``zeta`` of the linear spring-dashpot that gives restitution ``e`` in (0, 1]."""
+    log_e = math.log(restitution)
+    return -log_e / math.sqrt(math.pi**2 + log_e**2)
+
+
+def collision_time(normal_stiffness: float, reduced_mass: float, restitution: float) -> float:
+    """Duration [s] of a binary linear spring-dashpot collision: ``pi / omega_d`` with the damped
+    angular frequency ``omega_d = sqrt(k/m*) sqrt(1 - zeta^2)``."""
+    zeta = damping_ratio(restitution)
+    return math.pi / (math.sqrt(normal_stiffness / reduced_mass) * math.sqrt(1.0 - zeta**2))
+
+
+def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tangential_damping_factor,
+                       friction, rolling_friction, dt) -> np.ndarray:
+    """Pack the contact law's parameters into the float vector that kernels take."""
+    p = np.zeros(7)
+    p[K_N] = normal_stiffness
+    p[K_T] = tangential_stiffness
+    p[ZETA_N] = damping_ratio(restitution)
+    p[ETA_T_OVER_ETA_N] = tangential_damping_factor
+    p[FRICTION] = friction
+    p[ROLLING_FRICTION] = rolling_friction
+    p[DT] = dt
+    return p
+
+
+@njit(cache=True, inline="always")
+def normal_force(delta, v_n, k_n, eta_n):
+    """Signed normal force magnitude [N] along n (positive pushes the particle away)."""
+    return k_n * delta - eta_n * v_n
+
+
+@njit(cache=True, inline="always")
+def normal_damping(zeta, reduced_mass, k_n):
+    """Dashpot coefficient ``eta_n`` [kg/s] from damping ratio and reduced mass [kg]."""
+    return 2.0 * zeta * math.sqrt(reduced_mass * k_n)
+
+
+@njit(cache=True, inline="always")
+def tangential_force(history, row, nx, ny, nz, vtx, vty, vtz, f_n, k_t, eta_t, mu, dt):
+    """Tangential spring-dashpot with Coulomb limit; updates ``history[row]`` (the tangential
+    displacement, m) in place and returns the force (3 floats) [N]."""
+    hx = history[row, 0]
+    hy = history[row, 1]
+    hz = history[row, 2]
+    # rotate the stored displacement into the current tangent plane, keeping its length
+    h_len2 = hx * hx + hy * hy + hz * hz
+    if h_len2 > 0.0:
+        hn = hx * nx + hy * ny + hz * nz
+        hx -= hn * nx
+        hy -= hn * ny
+        hz -= hn * nz
+        new_len2 = hx * hx + hy * hy + hz * hz
+        if new_len2 > 0.0:
+            scale = math.sqrt(h_len2 / new_len2)
+            hx *= scale
+            hy *= scale
+            hz *= scale
+    hx += vtx * dt
+    hy += vty * dt
+    hz += vtz * dt
+    fx = -k_t * hx - eta_t * vtx
+    fy = -k_t * hy - eta_t * vty
+    fz = -k_t * hz - eta_t * vtz
+    f_t = math.sqrt(fx * fx + fy * fy + fz * fz)
+    f_max = mu * abs(f_n)
+    if f_t > f_max:
+        scale = f_max / f_t
+        fx *= scale
+        fy *= scale
+        fz *= scale
+        hx = -(fx + eta_t * vtx) / k_t
+        hy = -(fy + eta_t * vty) / k_t
+        hz = -(fz + eta_t * vtz) / k_t
+    history[row, 0] = hx
+    history[row, 1] = hy
+    history[row, 2] = hz
+    return fx, fy, fz
+
+
+@njit(cache=True, inline="always")
+def rolling_torque(nx, ny, nz, wx, wy, wz, f_n, mu_r, r_eff, inertia_eff, dt):
+    """Constant directional rolling-friction torque [N m] on the particle, from the relative
+    angular velocity ``w`` [rad/s] of particle minus partner."""
+    wn = wx * nx + wy * ny + wz * nz
+    rx = wx - wn * nx
+    ry = wy - wn * ny
+    rz = wz - wn * nz
+    w_roll = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if w_roll == 0.0 or mu_r == 0.0:
+        return 0.0, 0.0, 0.0
+    magnitude = min(mu_r * r_eff * abs(f_n), inertia_eff * w_roll / dt)
+    s = -magnitude / w_roll
+    return s * rx, s * ry, s * rz
+
+
+@njit(cache=True, inline="always")
+def contact_force(history, row, delta, nx, ny, nz, vx, vy, vz, wx, wy, wz,
+                  reduced_mass, r_eff, inertia_eff, params):
+    """Total contact force on the particle [N] and its rolling torque [N m].
+
+    ``delta`` overlap [m]; ``n`` unit normal from partner to particle; ``v`` relative velocity of
+    the particle's contact point [m/s]; ``w`` relative angular velocity [rad/s]. Returns
+    ``(fx, fy, fz, tx, ty, tz, f_n)`` with ``f_n`` the signed normal force magnitude.
+    """
+    k_n = params[K_N]
+    dt = params[DT]
+    v_n = vx * nx + vy * ny + vz * nz
+    eta_n = normal_damping(params[ZETA_N], reduced_mass, k_n)
+    f_n = normal_force(delta, v_n, k_n, eta_n)
+    ftx, fty, ftz = tangential_force(history, row, nx, ny, nz, vx - v_n * nx, vy - v_n * ny, vz - v_n * nz,
+                                     f_n, params[K_T], eta_n * params[ETA_T_OVER_ETA_N], params[FRICTION], dt)
+    trx, try_, trz = rolling_torque(nx, ny, nz, wx, wy, wz, f_n, params[ROLLING_FRICTION], r_eff, inertia_eff, dt)
+    return f_n * nx + ftx, f_n * ny + fty, f_n * nz + ftz, trx, try_, trz, f_n

@@ -1,0 +1,266 @@
+"""The DEM system: owns the particle arrays, neighbour list and contact histories, and advances
+them with the numba kernels. One step (velocity Verlet):
+
+1. ``kick_drift``: half kick with the forces of the previous step, drift, orientation update;
+2. rebuild the neighbour list (cell sort + history transfer) if some particle moved > skin/2;
+3. ``pair_forces`` then ``gather_forces``: contact forces and torques, walls included;
+4. ``kick``: second half kick.
+
+External (e.g. hydrodynamic) forces in ``particles.external_force/torque`` are held over the step.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .contact_law import collision_time, contact_parameters
+from .forces import gather_forces, pair_forces
+from .integrate import kick, kick_drift
+from .neighbours import (build_half_list, build_reverse_index, cell_indices, cell_starts,
+                         transfer_history, wrap_periodic)
+from .particles import ParticleArrays
+
+
+class SimulationError(RuntimeError):
+    """A run cannot continue (non-finite values, particles lost, unstable settings)."""
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned domain [m]. Non-periodic axes have planar walls on both faces."""
+
+    lower: tuple
+    upper: tuple
+    periodic: tuple = (False, False, False)
+
+    @property
+    def length(self) -> np.ndarray:
+        return np.asarray(self.upper, float) - np.asarray(self.lower, float)
+
+    @property
+    def wall_faces(self) -> np.ndarray:
+        """Flags for the faces x-, x+, y-, y+, z-, z+."""
+        return np.repeat(~np.asarray(self.periodic, bool), 2)
+
+
+@dataclass(frozen=True)
+class ContactModel:
+    """Contact law parameters (SI). ``tangential_stiffness`` [N/m] defaults to 2/7 of the normal."""
+
+    normal_stiffness: float = 2.0e4
+    restitution: float = 0.43
+    friction: float = 0.46
+    rolling_friction: float = 0.46
+    tangential_stiffness_ratio: float = 2.0 / 7.0
+    tangential_damping_ratio: float = 1.0
+
+    def parameters(self, dt: float) -> np.ndarray:
+        return contact_parameters(self.normal_stiffness, self.tangential_stiffness_ratio * self.normal_stiffness,
+                                  self.restitution, self.tangential_damping_ratio, self.friction,
+                                  self.rolling_friction, dt)
+
+    def collision_time(self, mass: float) -> float:
+        """Binary collision time [s] of two particles of ``mass`` [kg] (reduced mass m/2)."""
+        return collision_time(self.normal_stiffness, 0.5 * mass, self.restitution)
+
+
+class DEMSystem:
+    """Particles, walls and contacts advanced in time. Arrays are numpy; see ``ParticleArrays``."""
+
+    def __init__(self, particles: ParticleArrays, box: Box, contact: ContactModel, dt: float,
+                 gravity=(0.0, 0.0, -9.81), skin: float | None = None):
+        self.particles = particles
+        self.box = box
+        self.contact = contact
+        self.dt = float(dt)
+        self.gravity = np.asarray(gravity, dtype=np.float64)
+        diam = 2.0 * float(particles.radius.min())
+        self.skin = float(skin) if skin is not None else 0.25 * diam
+        self.params = contact.parameters(self.dt)
+        self.track_orientation = bool(np.any(particles.half_length > 0.0))
+        self.step_count = 0
+        self.rebuild_count = 0
+        n = particles.count
+        self._box_lo = np.asarray(box.lower, np.float64)
+        self._box_hi = np.asarray(box.upper, np.float64)
+        self._box_len = box.length
+        self._periodic = np.asarray(box.periodic, np.bool_)
+        self._walls = box.wall_faces
+        reach = 2.0 * float(np.max(particles.radius + particles.half_length)) + self.skin
+        self._n_cells = np.maximum(1, np.floor(self._box_len / reach).astype(np.int64))
+        for d in range(3):
+            if self._periodic[d] and self._n_cells[d] < 3:
+                raise SimulationError(
+                    f"periodic axis {'xyz'[d]}: box length {self._box_len[d]:.4g} m must be at least 3 x the "
+                    f"neighbour reach {reach:.4g} m (2 x particle half-extent + skin)")
+        self._cell_size = self._box_len / self._n_cells
+        self._cell_of = np.empty(n, np.int64)
+        self.displacement = np.zeros(n)
+        # contact velocities: predicted at the end of the step (see integrate.kick_drift)
+        self._predicted_velocity = particles.velocity.copy()
+        self._predicted_angular_velocity = particles.angular_velocity.copy()
+        self.reference_position = particles.position.copy()
+        self.reference_axis = particles.axis.copy()
+        self.wall_history = np.zeros((n * 12, 3))
+        self.neighbours = np.zeros((n, 1), np.int64)
+        self.counts = np.zeros(n, np.int64)
+        self.history = np.zeros((n, 3))
+        self._reverse = np.zeros((n, 8), np.int64)
+        self._reverse_counts = np.zeros(n, np.int64)
+        self._row_max_overlap = np.zeros(n)
+        self._row_contacts = np.zeros(n, np.int64)
+        self._row_wall_contacts = np.zeros(n, np.int64)
+        self._allocate_pair_buffers(1)
+        self.rebuild()
+        self.compute_forces()
+
+    # ------------------------------------------------------------------ stepping
+    @property
+    def time(self) -> float:
+        """Simulated time [s] (step count times dt: no accumulated round-off)."""
+        return self.step_count * self.dt
+
+    def step(self, steps: int = 1) -> None:
+        """Advance ``steps`` DEM time steps."""
+        p = self.particles
+        for _ in range(steps):
+            kick_drift(p.position, p.velocity, p.angular_momentum, p.angular_velocity, p.quaternion, p.axis,
+                       p.half_length, p.mass, p.inertia, p.contact_force, p.contact_torque, p.external_force,
+                       p.external_torque, self.gravity, self.dt, self.reference_position, self.reference_axis,
+                       self.displacement, self.track_orientation, self._predicted_velocity,
+                       self._predicted_angular_velocity)
+            if self.displacement.max() > 0.5 * self.skin:
+                self.rebuild()
+            self.compute_forces()
+            kick(p.velocity, p.angular_momentum, p.angular_velocity, p.axis, p.half_length, p.mass, p.inertia,
+                 p.contact_force, p.contact_torque, p.external_force, p.external_torque, self.gravity, self.dt,
+                 self.track_orientation)
+            self.step_count += 1
+
+    def compute_forces(self) -> None:
+        p = self.particles
+        pair_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
+                    p.half_length, p.mass, p.inertia, self.neighbours, self.counts, self.history, self._pair_force, self._pair_torque_owner,
+                    self._pair_torque_partner, self._row_max_overlap, self._row_contacts, self._box_len,
+                    self._periodic, self.params)
+        gather_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
+                      p.half_length, p.mass, p.inertia, self.counts, self.neighbours.shape[1], self._reverse, self._reverse_counts,
+                      self._pair_force, self._pair_torque_owner, self._pair_torque_partner, self._walls,
+                      self._box_lo, self._box_hi, self.wall_history, self.params, p.contact_force,
+                      p.contact_torque, self._row_max_overlap, self._row_wall_contacts)
+
+    # ------------------------------------------------------------------ neighbour list
+    def _allocate_pair_buffers(self, width: int) -> None:
+        slots = self.particles.count * width
+        self._pair_force = np.zeros((slots, 3))
+        self._pair_torque_owner = np.zeros((slots, 3))
+        self._pair_torque_partner = np.zeros((slots, 3))
+
+    def rebuild(self) -> None:
+        """Sort particles by cell, rebuild the half list, carry contact histories over."""
+        p = self.particles
+        n = p.count
+        wrap_periodic(p.position, self._box_lo, self._box_len, self._periodic)
+        cell_indices(p.position, self._box_lo, self._cell_size, self._n_cells, self._cell_of)
+        order = np.argsort(self._cell_of, kind="stable")
+        if np.any(order != np.arange(n)):
+            p.permute(order)
+            self.wall_history = np.ascontiguousarray(self.wall_history.reshape(n, 12, 3)[order].reshape(n * 12, 3))
+            self._cell_of = self._cell_of[order]
+            self._predicted_velocity = np.ascontiguousarray(self._predicted_velocity[order])
+            self._predicted_angular_velocity = np.ascontiguousarray(self._predicted_angular_velocity[order])
+        total_cells = int(np.prod(self._n_cells))
+        start = cell_starts(self._cell_of, total_cells)
+        counts = np.zeros(n, np.int64)
+        args = (p.position, p.axis, p.radius, p.half_length, self._box_lo, self._box_len, self._periodic,
+                self._cell_size, self._n_cells, self._cell_of, start, self.skin)
+        build_half_list(*args, self.neighbours, counts, False)
+        width = max(1, int(counts.max()))
+        neighbours = np.zeros((n, width), np.int64)
+        build_half_list(*args, neighbours, counts, True)
+        history = np.zeros((n * width, 3))
+        transfer_history(self.neighbours, self.counts, self.history, neighbours, counts, history, order,
+                         self.neighbours.shape[1], width)
+        if width != self.neighbours.shape[1]:
+            self._allocate_pair_buffers(width)
+        self.neighbours, self.counts, self.history = neighbours, counts, history
+        self._index_reverse()
+        self.reference_position[:] = p.position
+        self.reference_axis[:] = p.axis
+        self.rebuild_count += 1
+
+    def _index_reverse(self) -> None:
+        width = self.neighbours.shape[1]
+        longest = build_reverse_index(self.neighbours, self.counts, width, self._reverse, self._reverse_counts)
+        if longest > self._reverse.shape[1]:
+            self._reverse = np.zeros((self.particles.count, longest + 4), np.int64)
+            build_reverse_index(self.neighbours, self.counts, width, self._reverse, self._reverse_counts)
+
+    # ------------------------------------------------------------------ diagnostics
+    def diagnostics(self) -> dict:
+        """Scalar diagnostics of the current state (all floats, SI)."""
+        n = self.particles.count
+        pair_contacts = int(self._row_contacts.sum())
+        return {
+            "time": self.time,
+            "kinetic_energy": self.particles.kinetic_energy(),
+            "max_overlap_over_diameter": float(self._row_max_overlap.max()) if n else 0.0,
+            "contacts_per_particle": 2.0 * pair_contacts / n if n else 0.0,
+            "wall_contacts": int(self._row_wall_contacts.sum()),
+            "max_speed": float(np.sqrt(np.max(np.einsum("ij,ij->i", self.particles.velocity,
+                                                         self.particles.velocity)))) if n else 0.0,
+        }
+
+    def check_health(self) -> None:
+        """Raise ``SimulationError`` with the cause if the state is non-finite or particles escaped."""
+        p = self.particles
+        if not np.all(np.isfinite(p.position)) or not np.all(np.isfinite(p.velocity)):
+            bad = np.where(~np.all(np.isfinite(p.position) & np.isfinite(p.velocity), axis=1))[0]
+            raise SimulationError(
+                f"non-finite position or velocity at t = {self.time:.6g} s for {len(bad)} particle(s) "
+                f"(first id {int(p.ids[bad[0]])}); DEM time step {self.dt:.3g} s, collision time "
+                f"{self.contact.collision_time(float(p.mass.min())):.3g} s")
+        tol = (p.radius + p.half_length)[:, None]
+        outside = ((p.position < self._box_lo - tol) | (p.position > self._box_hi + tol)) & ~self._periodic
+        if outside.any():
+            i = int(np.where(outside.any(axis=1))[0][0])
+            raise SimulationError(
+                f"particle id {int(p.ids[i])} left the domain through a wall at t = {self.time:.6g} s "
+                f"(position {p.position[i].round(5).tolist()} m): overlaps grew past the particle size; "
+                f"reduce the time step or raise the stiffness")
+
+    # ------------------------------------------------------------------ checkpoint state
+    def state(self) -> dict:
+        """Everything needed to continue bit-for-bit (arrays and counters)."""
+        data = {f"particles.{k}": v for k, v in self.particles.as_dict().items()}
+        data.update({
+            "dem.wall_history": self.wall_history, "dem.neighbours": self.neighbours, "dem.counts": self.counts,
+            "dem.history": self.history, "dem.reference_position": self.reference_position,
+            "dem.reference_axis": self.reference_axis,
+            "dem.counters": np.array([self.step_count, self.rebuild_count], np.int64),
+        })
+        return data
+
+    def restore(self, data) -> None:
+        """Load a ``state()`` dictionary (e.g. from an ``.npz`` checkpoint)."""
+        self.particles = ParticleArrays.from_dict({k.split(".", 1)[1]: data[k] for k in data
+                                                   if k.startswith("particles.")})
+        self.wall_history = np.ascontiguousarray(data["dem.wall_history"])
+        self.neighbours = np.ascontiguousarray(data["dem.neighbours"])
+        self.counts = np.ascontiguousarray(data["dem.counts"])
+        self.history = np.ascontiguousarray(data["dem.history"])
+        self.reference_position = np.ascontiguousarray(data["dem.reference_position"])
+        self.reference_axis = np.ascontiguousarray(data["dem.reference_axis"])
+        self.step_count, self.rebuild_count = (int(x) for x in data["dem.counters"])
+        self._allocate_pair_buffers(self.neighbours.shape[1])
+        self._index_reverse()
+        self.compute_forces_diagnostics_only()
+
+    def compute_forces_diagnostics_only(self) -> None:
+        """Refresh per-row diagnostics after a restore without touching forces or histories."""
+        saved = (self.particles.contact_force.copy(), self.particles.contact_torque.copy(),
+                 self.history.copy(), self.wall_history.copy())
+        self.compute_forces()
+        self.particles.contact_force[:], self.particles.contact_torque[:] = saved[0], saved[1]
+        self.history[:], self.wall_history[:] = saved[2], saved[3]

@@ -1,0 +1,307 @@
+"""The time loop of a case: builds the model from a ``Case``, advances it, runs writers on schedules.
+
+``Simulation.run`` advances in chunks of DEM steps up to the next scheduled event; at an event it
+(in this order) checks the state's health, appends a ``timeseries.csv`` row, writes a VTU
+snapshot, writes a checkpoint, and tests the stop criterion. Writers only read the state, so a
+run resumed from a checkpoint continues bit-for-bit as if uninterrupted.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from .analysis.bed import bed_top, packed_bed_summary
+from .case import Case, CaseError, to_toml
+from .dem.insertion import insert_particles
+from .dem.particles import ParticleArrays
+from .dem.system import Box, ContactModel, DEMSystem, SimulationError
+from .io.checkpoint import load_checkpoint, save_checkpoint
+from .io.timeseries import TimeseriesWriter
+from .io.vtk import write_particles_vtu, write_pvd
+
+CHECKPOINT = "checkpoint.npz"
+FINAL_STATE = "final_state.npz"
+TIMESERIES_COLUMNS = ("time", "kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle",
+                      "bed_top", "max_speed")
+
+
+class OutputError(RuntimeError):
+    """The output folder cannot be used as asked (exists, or nothing to resume)."""
+
+
+def set_threads(threads: int) -> int:
+    """Use ``threads`` numba threads (0: all available). Returns the number in use."""
+    available = numba.config.NUMBA_NUM_THREADS
+    wanted = available if threads == 0 else min(threads, available)
+    numba.set_num_threads(wanted)
+    return wanted
+
+
+def build_particles(case: Case) -> ParticleArrays:
+    """Particles of a case: inserted without overlap, or loaded from ``particles.initial_state``."""
+    cfg = case.particles
+    if cfg.initial_state is not None:
+        path = case.resolve_path(cfg.initial_state)
+        if not path.exists():
+            raise CaseError([f"particles.initial_state = {cfg.initial_state!r}: file {path} does not exist "
+                             "(run the case that writes it first, e.g. fvdem run cases/bed_ar1.toml)"])
+        with np.load(path) as data:
+            particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
+        if particles.count != cfg.count:
+            raise CaseError([f"particles.count = {cfg.count}: the initial state {path} holds {particles.count}"])
+        if not (np.allclose(particles.radius, cfg.radius) and np.allclose(particles.half_length, cfg.half_length)):
+            raise CaseError([f"particles: the shape in {path} differs from the case's diameter/length"])
+    else:
+        ins = cfg.insertion
+        lower = ins.lower or case.domain.lower
+        upper = ins.upper or case.domain.upper
+        try:
+            position, axis = insert_particles(cfg.count, cfg.radius, cfg.half_length, lower, upper,
+                                              ins.orientation if cfg.shape == "spherocylinder" else "vertical",
+                                              ins.gap, ins.seed)
+        except ValueError as exc:
+            raise CaseError([f"particles.insertion: {exc}"]) from None
+        particles = ParticleArrays.create(position, cfg.radius, cfg.half_length, cfg.density, axis=axis)
+    if cfg.colour == "by_height":
+        rank = np.empty(particles.count, np.int64)
+        rank[np.argsort(particles.position[:, 2], kind="stable")] = np.arange(particles.count)
+        particles.colour[:] = (rank >= particles.count // 2).astype(np.int32)
+    else:
+        particles.colour[:] = 0
+    return particles
+
+
+def build_dem(case: Case, particles: ParticleArrays) -> DEMSystem:
+    c = case.contact
+    contact = ContactModel(c.normal_stiffness, c.restitution, c.friction, c.rolling_friction,
+                           c.tangential_stiffness_ratio, c.tangential_damping_ratio)
+    box = Box(case.domain.lower, case.domain.upper, case.domain.periodic)
+    return DEMSystem(particles, box, contact, case.time.dem_step, case.domain.gravity, case.neighbour_skin())
+
+
+def prepare_output(out_dir, overwrite: bool = False, resume: bool = False) -> Path:
+    """Create the output folder; never replace results unless ``overwrite``."""
+    out = Path(out_dir)
+    if resume:
+        if not (out / CHECKPOINT).exists():
+            raise OutputError(f"--resume: {out} holds no {CHECKPOINT} to resume from")
+        return out
+    if out.exists() and any(out.iterdir()):
+        if not overwrite:
+            raise OutputError(f"output folder {out} exists and is not empty; pass --overwrite to replace it "
+                              "or --resume to continue its run")
+        shutil.rmtree(out)
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+@dataclass
+class _Schedule:
+    every: int  # steps
+
+    def due(self, step: int) -> bool:
+        return step % self.every == 0
+
+    def next_after(self, step: int) -> int:
+        return (step // self.every + 1) * self.every
+
+
+@dataclass
+class _WriterState:
+    pvd_entries: list = field(default_factory=list)
+    wall_seconds: float = 0.0
+    cpu_seconds: float = 0.0
+    settled: bool = False
+
+
+class Simulation:
+    """A case, its model state and (optionally) its output folder.
+
+    Library use::
+
+        case = fvdem.load_case("cases/bed_ar1.toml", {"particles.count": 2000, "time.end": 0.2})
+        sim = fvdem.Simulation(case)            # no output folder: nothing is written
+        sim.run(0.05)                           # advance 0.05 s of simulated time
+        sim.particles.position, sim.diagnostics()
+    """
+
+    def __init__(self, case: Case, out_dir=None, *, overwrite: bool = False, resume: bool = False,
+                 progress: bool | None = None, threads: int | None = None):
+        self.case = case
+        self.threads = set_threads(case.run.threads if threads is None else threads)
+        self.progress = case.output.progress if progress is None else progress
+        self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
+        self.writers = _WriterState()
+        dt = case.time.dem_step
+        self._timeseries_schedule = _Schedule(max(1, round(case.output.timeseries_interval / dt)))
+        self._snapshot_schedule = _Schedule(max(1, round(case.output.snapshot_interval / dt)))
+        self._checkpoint_schedule = _Schedule(max(1, round(case.output.checkpoint_interval / dt)))
+        self._stop_requested = False
+        if resume:
+            arrays, meta = load_checkpoint(self.out / CHECKPOINT)
+            particles = ParticleArrays.from_dict({k.split(".", 1)[1]: v for k, v in arrays.items()
+                                                  if k.startswith("particles.")})
+            self.dem = build_dem(case, particles)
+            self.dem.restore(arrays)
+            self.writers = _WriterState(**meta["writers"])
+            self._timeseries().start(resume_time=self.dem.time)
+        else:
+            self.dem = build_dem(case, build_particles(case))
+            if self.out is not None:
+                (self.out / "case.toml").write_text(to_toml(case))
+                self._timeseries().start()
+                self._on_events(self.dem.step_count)
+
+    # ------------------------------------------------------------------ state access
+    @property
+    def particles(self) -> ParticleArrays:
+        return self.dem.particles
+
+    @property
+    def time(self) -> float:
+        return self.dem.time
+
+    def diagnostics(self) -> dict:
+        diag = self.dem.diagnostics()
+        p = self.particles
+        diag["bed_top"] = bed_top(p.position, p.axis, p.radius, p.half_length)
+        return diag
+
+    # ------------------------------------------------------------------ running
+    def request_stop(self, *_):
+        """Ask the loop to stop at the next chunk boundary (checkpoint written)."""
+        self._stop_requested = True
+
+    def run(self, duration: float | None = None) -> dict:
+        """Advance ``duration`` [s] of simulated time (default: to ``time.end``), or until settled /
+        stopped. Returns the summary dictionary (also written as summary.json with an output folder)."""
+        dt = self.dem.dt
+        end_time = self.case.time.end if duration is None else self.time + duration
+        end_step = int(round(end_time / dt))
+        start_step = self.dem.step_count
+        bar = self._progress_bar(end_time)
+        wall0, cpu0 = _time.perf_counter(), _time.process_time()
+        handlers = self._install_signal_handlers()
+        try:
+            while self.dem.step_count < end_step and not self._stop_requested and not self.writers.settled:
+                step = self.dem.step_count
+                target = min(end_step, self._next_event(step), step + 500)
+                self.dem.step(target - step)
+                self._on_events(self.dem.step_count)
+                if bar is not None:
+                    bar.update(self.time - bar.n)
+        finally:
+            self._restore_signal_handlers(handlers)
+            if bar is not None:
+                bar.close()
+            self.writers.wall_seconds += _time.perf_counter() - wall0
+            self.writers.cpu_seconds += _time.process_time() - cpu0
+        steps = self.dem.step_count - start_step
+        summary = self.summary(steps, _time.perf_counter() - wall0)
+        if self.out is not None:
+            self._write_checkpoint()
+            self._write_final(summary)
+        return summary
+
+    def _next_event(self, step: int) -> int:
+        if self.out is None:
+            return self._timeseries_schedule.next_after(step) if self.case.time.stop_when_settled else step + 10**9
+        return min(s.next_after(step) for s in (self._timeseries_schedule, self._snapshot_schedule,
+                                                  self._checkpoint_schedule))
+
+    def _on_events(self, step: int) -> None:
+        if self._timeseries_schedule.due(step):
+            self.dem.check_health()
+            diag = self.diagnostics()
+            if self.out is not None:
+                self._timeseries().append(diag)
+            t = self.case.time
+            if t.stop_when_settled and self.time >= t.min_time and step > 0 and diag["max_speed"] < t.settled_speed:
+                self.writers.settled = True
+        if self.out is None:
+            return
+        if self.case.output.vtk and self._snapshot_schedule.due(step):
+            name = f"particles_{len(self.writers.pvd_entries):05d}.vtu"
+            write_particles_vtu(self.out / name, self.particles)
+            self.writers.pvd_entries.append((self.time, name))
+            write_pvd(self.out / "particles.pvd", self.writers.pvd_entries)
+        if self._checkpoint_schedule.due(step) and step > 0:
+            self._write_checkpoint()
+
+    def _timeseries(self) -> TimeseriesWriter:
+        return TimeseriesWriter(self.out / "timeseries.csv", TIMESERIES_COLUMNS)
+
+    # ------------------------------------------------------------------ outputs
+    def summary(self, steps: int = 0, wall: float = 0.0) -> dict:
+        n = self.particles.count
+        diag = self.diagnostics()
+        summary = {
+            "case": self.case.name,
+            "particles": n,
+            "shape": self.case.particles.shape,
+            "simulated_time": self.time,
+            "steps": self.dem.step_count,
+            "settled": self.writers.settled,
+            "stopped_early": self._stop_requested,
+            "threads": self.threads,
+            "wall_seconds": self.writers.wall_seconds,
+            "cpu_seconds": self.writers.cpu_seconds,
+            "ns_per_particle_step_last_run": 1e9 * wall / (steps * n) if steps else None,
+            "collision_time": self.case.collision_time(),
+            "neighbour_rebuilds": self.dem.rebuild_count,
+            **{k: diag[k] for k in ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle",
+                                    "wall_contacts", "max_speed")},
+        }
+        summary.update(packed_bed_summary(self.particles, self.dem.box))
+        return summary
+
+    def _write_checkpoint(self) -> None:
+        meta = {"writers": {"pvd_entries": self.writers.pvd_entries, "wall_seconds": self.writers.wall_seconds,
+                            "cpu_seconds": self.writers.cpu_seconds, "settled": self.writers.settled},
+                "time": self.time}
+        save_checkpoint(self.out / CHECKPOINT, self.dem.state(), meta)
+
+    def _write_final(self, summary: dict) -> None:
+        p = self.particles
+        order = np.argsort(p.ids, kind="stable")
+        tmp = self.out / (FINAL_STATE + ".tmp")
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **{k: v[order] for k, v in p.as_dict().items()})
+        os.replace(tmp, self.out / FINAL_STATE)
+        (self.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+
+    def _progress_bar(self, end_time: float):
+        if not self.progress:
+            return None
+        from tqdm import tqdm
+        return tqdm(total=end_time, initial=self.time, unit="s", unit_scale=False, dynamic_ncols=True,
+                    desc=f"{self.case.name} (simulated s)",
+                    bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.4f}/{total:.4f} s [{elapsed}<{remaining}]")
+
+    def _install_signal_handlers(self):
+        if self.out is None:
+            return None
+        try:
+            return {s: signal.signal(s, self.request_stop) for s in (signal.SIGINT, signal.SIGTERM)}
+        except ValueError:  # not in the main thread
+            return None
+
+    @staticmethod
+    def _restore_signal_handlers(handlers) -> None:
+        for sig, handler in (handlers or {}).items():
+            signal.signal(sig, handler)
+
+    @property
+    def stopped_early(self) -> bool:
+        return self._stop_requested
+
+
+__all__ = ["Simulation", "SimulationError", "OutputError", "build_particles", "build_dem", "prepare_output"]
