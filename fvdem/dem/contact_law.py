@@ -3,9 +3,14 @@ Coulomb limit, constant-directional-torque rolling friction (seed 000, Eqs. 3-5,
 
 Each sub-model is a small pure function; ``contact_force`` evaluates them in one visible order:
 
-1. normal:      ``F_n = (k_n delta - eta_n v_n) n``                         (Eq. 3)
-2. damping:     ``eta_n = 2 zeta sqrt(m* k_n)``, ``zeta = -ln e / sqrt(pi^2 + ln^2 e)`` so that a
-                free binary collision rebounds with restitution ``e`` exactly (linear oscillator)
+1. normal:      ``F_n = max(k_n delta - eta_n v_n, 0) n``                   (Eq. 3, never attractive)
+2. damping:     ``eta_n = 2 zeta sqrt(m* k_n)`` with ``zeta`` chosen so that a free binary collision
+                rebounds with restitution ``e`` exactly. Because the force is clipped at zero, the
+                collision ends when the force vanishes (before the overlap does) and the textbook
+                ``zeta = -ln e / sqrt(pi^2 + ln^2 e)`` (valid for the unclipped model) would give a
+                lower ``e``. The exact relation for the clipped model (Schwager & Poeschel 2007,
+                Granular Matter 9:465) is ``e = exp(-beta t_e)``, ``t_e = (pi - 2 atan(beta/w))/w``,
+                ``beta = zeta w0``, ``w = w0 sqrt(1 - zeta^2)``; ``damping_ratio`` inverts it.
 3. tangential:  ``delta_t = int v_t dt`` since first contact, rotated into the current tangent
                 plane (length kept); ``F_t = -k_t delta_t - eta_t v_t``; if ``|F_t| > mu |F_n|``
                 then ``F_t`` is scaled to ``mu |F_n|`` and ``delta_t`` truncated to
@@ -16,12 +21,24 @@ Each sub-model is a small pure function; ``contact_force`` evaluates them in one
                 (Ai et al. 2011, model A). The torque is capped so that it cannot reverse the
                 relative rolling within one step (``|T_r| <= I* |w_roll| / dt``): no chattering.
 
-The normal force is not clipped at zero (the damping can pull during rebound), which is the model
-for which the restitution formula is exact.
+Onset: the dashpot force jumps to ``eta_n |v_n|`` at first touch, which falls somewhere inside a
+time step; velocity Verlet attributes the first contact sample's impulse to the window
+``t +- dt/2``, so the impulse before (or after) the true touch time is lost (or counted twice). This
+gives every impact a restitution error of first order in dt whose sign depends on where the touch
+falls in the step (+-6 % at dt = t_c/14). On the first step of a contact the damping force is
+therefore scaled by ``1/2 + phi``, ``phi = delta / (|v_n| dt)`` (clamped to [0, 1]) the fraction of
+the step spent in contact, which makes the onset impulse exact to first order. Each contact's
+history carries a fourth column, 1 while the contact exists, to know its first step.
+
+Clipping matters for friction: with an attractive dashpot tail, friction would keep acting on
+``|F_n|`` while the net normal impulse shrinks, and the tangential impulse of a sliding impact would
+exceed ``mu`` times the normal impulse (by 9 % for e = 0.43). Clipped, ``J_t <= mu J_n`` holds exactly.
 """
 from __future__ import annotations
 
 import math
+
+HISTORY_COLUMNS = 4  # tangential displacement (3) and the "contact exists" flag
 
 import numpy as np
 from numba import njit
@@ -30,17 +47,51 @@ from numba import njit
 K_N, K_T, ZETA_N, ETA_T_OVER_ETA_N, FRICTION, ROLLING_FRICTION, DT = range(7)
 
 
+def _collision_in_units_of_w0(zeta: float):
+    """``(w0 t_e, e)`` of a clipped linear spring-dashpot collision with damping ratio ``zeta``
+    (time in units of 1/w0). Underdamped, critically and overdamped branches."""
+    if zeta == 0.0:
+        return math.pi, 1.0
+    if zeta < 1.0:
+        w = math.sqrt(1.0 - zeta * zeta)
+        t_end = (math.pi - 2.0 * math.atan(zeta / w)) / w
+        return t_end, math.exp(-zeta * t_end)
+    if zeta == 1.0:
+        zeta = 1.0 + 1e-9
+    g = math.sqrt(zeta * zeta - 1.0)
+    r1, r2 = -zeta + g, -zeta - g
+    # force ~ xi + 2 zeta xi' vanishes where exp((r1 - r2) t) = (1 + 2 zeta r2) / (1 + 2 zeta r1)
+    t_end = math.log((1.0 + 2.0 * zeta * r2) / (1.0 + 2.0 * zeta * r1)) / (r1 - r2)
+    velocity = (r1 * math.exp(r1 * t_end) - r2 * math.exp(r2 * t_end)) / (2.0 * g)
+    return t_end, -velocity
+
+
+def restitution_of_damping(zeta: float) -> float:
+    """Restitution of a free binary collision with the clipped linear dashpot of damping ratio ``zeta``."""
+    return _collision_in_units_of_w0(zeta)[1]
+
+
 def damping_ratio(restitution: float) -> float:
-    """Damping ratio ``zeta`` of the linear spring-dashpot that gives restitution ``e`` in (0, 1]."""
-    log_e = math.log(restitution)
-    return -log_e / math.sqrt(math.pi**2 + log_e**2)
+    """Damping ratio ``zeta`` of the clipped linear spring-dashpot that gives restitution
+    ``e`` in (0, 1] (bisection on the exact, monotone ``restitution_of_damping``)."""
+    if restitution >= 1.0:
+        return 0.0
+    lo, hi = 0.0, 1.0
+    while restitution_of_damping(hi) > restitution:
+        hi *= 2.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if restitution_of_damping(mid) > restitution:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
 
 
 def collision_time(normal_stiffness: float, reduced_mass: float, restitution: float) -> float:
-    """Duration [s] of a binary linear spring-dashpot collision: ``pi / omega_d`` with the damped
-    angular frequency ``omega_d = sqrt(k/m*) sqrt(1 - zeta^2)``."""
+    """Duration [s] of a free binary collision (until the clipped force vanishes)."""
     zeta = damping_ratio(restitution)
-    return math.pi / (math.sqrt(normal_stiffness / reduced_mass) * math.sqrt(1.0 - zeta**2))
+    return _collision_in_units_of_w0(zeta)[0] / math.sqrt(normal_stiffness / reduced_mass)
 
 
 def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tangential_damping_factor,
@@ -59,8 +110,8 @@ def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tang
 
 @njit(cache=True, inline="always")
 def normal_force(delta, v_n, k_n, eta_n):
-    """Signed normal force magnitude [N] along n (positive pushes the particle away)."""
-    return k_n * delta - eta_n * v_n
+    """Normal force magnitude [N] along n, pushing the particle away; clipped at zero (no attraction)."""
+    return max(k_n * delta - eta_n * v_n, 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -71,7 +122,7 @@ def normal_damping(zeta, reduced_mass, k_n):
 
 @njit(cache=True, inline="always")
 def tangential_force(history, row, nx, ny, nz, vtx, vty, vtz, f_n, k_t, eta_t, mu, dt):
-    """Tangential spring-dashpot with Coulomb limit; updates ``history[row]`` (the tangential
+    """Tangential spring-dashpot with Coulomb limit; updates ``history[row, :3]`` (the tangential
     displacement, m) in place and returns the force (3 floats) [N]."""
     hx = history[row, 0]
     hy = history[row, 1]
@@ -96,7 +147,7 @@ def tangential_force(history, row, nx, ny, nz, vtx, vty, vtz, f_n, k_t, eta_t, m
     fy = -k_t * hy - eta_t * vty
     fz = -k_t * hz - eta_t * vtz
     f_t = math.sqrt(fx * fx + fy * fy + fz * fz)
-    f_max = mu * abs(f_n)
+    f_max = mu * f_n
     if f_t > f_max:
         scale = f_max / f_t
         fx *= scale
@@ -122,7 +173,7 @@ def rolling_torque(nx, ny, nz, wx, wy, wz, f_n, mu_r, r_eff, inertia_eff, dt):
     w_roll = math.sqrt(rx * rx + ry * ry + rz * rz)
     if w_roll == 0.0 or mu_r == 0.0:
         return 0.0, 0.0, 0.0
-    magnitude = min(mu_r * r_eff * abs(f_n), inertia_eff * w_roll / dt)
+    magnitude = min(mu_r * r_eff * f_n, inertia_eff * w_roll / dt)
     s = -magnitude / w_roll
     return s * rx, s * ry, s * rz
 
@@ -132,15 +183,21 @@ def contact_force(history, row, delta, nx, ny, nz, vx, vy, vz, wx, wy, wz,
                   reduced_mass, r_eff, inertia_eff, params):
     """Total contact force on the particle [N] and its rolling torque [N m].
 
+    ``history[row]`` holds the tangential displacement [m] and the contact flag (see module doc).
     ``delta`` overlap [m]; ``n`` unit normal from partner to particle; ``v`` relative velocity of
     the particle's contact point [m/s]; ``w`` relative angular velocity [rad/s]. Returns
-    ``(fx, fy, fz, tx, ty, tz, f_n)`` with ``f_n`` the signed normal force magnitude.
+    ``(fx, fy, fz, tx, ty, tz, f_n)`` with ``f_n >= 0`` the normal force magnitude.
     """
     k_n = params[K_N]
     dt = params[DT]
     v_n = vx * nx + vy * ny + vz * nz
     eta_n = normal_damping(params[ZETA_N], reduced_mass, k_n)
-    f_n = normal_force(delta, v_n, k_n, eta_n)
+    onset = 1.0
+    if history[row, 3] == 0.0:  # first step of this contact
+        history[row, 3] = 1.0
+        if v_n < 0.0:
+            onset = 0.5 + min(delta / (-v_n * dt), 1.0)
+    f_n = normal_force(delta, v_n, k_n, eta_n * onset)
     ftx, fty, ftz = tangential_force(history, row, nx, ny, nz, vx - v_n * nx, vy - v_n * ny, vz - v_n * nz,
                                      f_n, params[K_T], eta_n * params[ETA_T_OVER_ETA_N], params[FRICTION], dt)
     trx, try_, trz = rolling_torque(nx, ny, nz, wx, wy, wz, f_n, params[ROLLING_FRICTION], r_eff, inertia_eff, dt)

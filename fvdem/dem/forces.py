@@ -30,7 +30,7 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
                 row_max_overlap, row_contacts, box_length, periodic, params):
     """Contact force and torques of every listed pair; fills the per-slot result arrays.
 
-    ``history``, ``pair_force`` etc. are flat ``(N * width, 3)`` arrays indexed by slot
+    ``history`` (4 columns, see ``contact_law``), ``pair_force`` etc. (3 columns) are flat ``(N * width, .)`` arrays indexed by slot
     ``i * width + k``. ``row_max_overlap[i]`` gets the largest overlap/diameter of row i and
     ``row_contacts[i]`` the number of touching pairs in row i.
     """
@@ -54,9 +54,8 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             dist2 = dx * dx + dy * dy + dz * dz
             radius_sum = radius[i] + radius[j]
             if dist2 >= radius_sum * radius_sum:
-                history[slot, 0] = 0.0
-                history[slot, 1] = 0.0
-                history[slot, 2] = 0.0
+                for c in range(4):
+                    history[slot, c] = 0.0
                 for c in range(3):
                     pair_force[slot, c] = 0.0
                     pair_torque_owner[slot, c] = 0.0
@@ -113,7 +112,7 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
                   pair_torque_partner, wall_active, box_lo, box_hi, wall_history, params,
                   contact_force_out, contact_torque_out, row_max_overlap, row_wall_contacts):
     """Sum pair results per particle and add wall contacts (faces flagged in ``wall_active``:
-    x-, x+, y-, y+, z-, z+). ``wall_history`` is flat ``(N * 12, 3)``: slot ``(i*6 + face)*2 + end``."""
+    x-, x+, y-, y+, z-, z+). ``wall_history`` is flat ``(N * 12, 4)``: slot ``(i*6 + face)*2 + end``."""
     n = position.shape[0]
     for i in prange(n):
         fx = 0.0
@@ -161,9 +160,8 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
                 slot = (i * 6 + face) * 2 + end
                 overlap = r - dist
                 if overlap <= 0.0:
-                    wall_history[slot, 0] = 0.0
-                    wall_history[slot, 1] = 0.0
-                    wall_history[slot, 2] = 0.0
+                    for c in range(4):
+                        wall_history[slot, c] = 0.0
                     continue
                 nd = -1.0 if upper else 1.0
                 nx = nd if d == 0 else 0.0

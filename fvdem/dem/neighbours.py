@@ -129,7 +129,8 @@ def transfer_history(old_neighbours, old_counts, old_history, new_neighbours, ne
 
     ``new_to_old[k]`` is the old row of new particle k. A pair found in the old row of the
     same owner keeps its history; one found in the partner's old row gets it negated (the
-    history is the displacement of the owner relative to the partner). New pairs start at 0.
+    history is the displacement of the owner relative to the partner; the contact flag in column 3
+    is copied). New pairs start at 0.
     """
     n = new_counts.shape[0]
     old_of_new = new_to_old
@@ -138,25 +139,23 @@ def transfer_history(old_neighbours, old_counts, old_history, new_neighbours, ne
         for k in range(new_counts[i]):
             oj = old_of_new[new_neighbours[i, k]]
             slot = i * new_width + k
-            new_history[slot, 0] = 0.0
-            new_history[slot, 1] = 0.0
-            new_history[slot, 2] = 0.0
+            for c in range(4):
+                new_history[slot, c] = 0.0
             found = False
             for m in range(old_counts[oi]):
                 if old_neighbours[oi, m] == oj:
                     src = oi * old_width + m
-                    new_history[slot, 0] = old_history[src, 0]
-                    new_history[slot, 1] = old_history[src, 1]
-                    new_history[slot, 2] = old_history[src, 2]
+                    for c in range(4):
+                        new_history[slot, c] = old_history[src, c]
                     found = True
                     break
             if not found:
                 for m in range(old_counts[oj]):
                     if old_neighbours[oj, m] == oi:
                         src = oj * old_width + m
-                        new_history[slot, 0] = -old_history[src, 0]
-                        new_history[slot, 1] = -old_history[src, 1]
-                        new_history[slot, 2] = -old_history[src, 2]
+                        for c in range(3):
+                            new_history[slot, c] = -old_history[src, c]
+                        new_history[slot, 3] = old_history[src, 3]  # the contact flag has no sign
                         break
 
 

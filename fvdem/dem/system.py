@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contact_law import collision_time, contact_parameters
+from .contact_law import HISTORY_COLUMNS, collision_time, contact_parameters
 from .forces import gather_forces, pair_forces
 from .integrate import kick, kick_drift
 from .neighbours import (build_half_list, build_reverse_index, cell_indices, cell_starts,
@@ -102,10 +102,10 @@ class DEMSystem:
         self._predicted_angular_velocity = particles.angular_velocity.copy()
         self.reference_position = particles.position.copy()
         self.reference_axis = particles.axis.copy()
-        self.wall_history = np.zeros((n * 12, 3))
+        self.wall_history = np.zeros((n * 12, HISTORY_COLUMNS))
         self.neighbours = np.zeros((n, 1), np.int64)
         self.counts = np.zeros(n, np.int64)
-        self.history = np.zeros((n, 3))
+        self.history = np.zeros((n, HISTORY_COLUMNS))
         self._reverse = np.zeros((n, 8), np.int64)
         self._reverse_counts = np.zeros(n, np.int64)
         self._row_max_overlap = np.zeros(n)
@@ -166,7 +166,7 @@ class DEMSystem:
         order = np.argsort(self._cell_of, kind="stable")
         if np.any(order != np.arange(n)):
             p.permute(order)
-            self.wall_history = np.ascontiguousarray(self.wall_history.reshape(n, 12, 3)[order].reshape(n * 12, 3))
+            self.wall_history = np.ascontiguousarray(self.wall_history.reshape(n, 12, HISTORY_COLUMNS)[order].reshape(n * 12, HISTORY_COLUMNS))
             self._cell_of = self._cell_of[order]
             self._predicted_velocity = np.ascontiguousarray(self._predicted_velocity[order])
             self._predicted_angular_velocity = np.ascontiguousarray(self._predicted_angular_velocity[order])
@@ -179,7 +179,7 @@ class DEMSystem:
         width = max(1, int(counts.max()))
         neighbours = np.zeros((n, width), np.int64)
         build_half_list(*args, neighbours, counts, True)
-        history = np.zeros((n * width, 3))
+        history = np.zeros((n * width, HISTORY_COLUMNS))
         transfer_history(self.neighbours, self.counts, self.history, neighbours, counts, history, order,
                          self.neighbours.shape[1], width)
         if width != self.neighbours.shape[1]:

@@ -1,0 +1,199 @@
+"""Contact law against analytical binary-collision results."""
+import math
+
+import numpy as np
+import pytest
+
+from fvdem.dem.contact_law import collision_time, damping_ratio
+from fvdem.dem.system import Box, ContactModel
+
+from conftest import DENSITY, SPHERE_D, by_id, make_system
+
+R = SPHERE_D / 2
+WALLED = Box((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), (False, False, False))
+
+
+def run_until_separated(system, max_steps=100_000):
+    """Step until the particles have touched and separated again."""
+    touched = False
+    for _ in range(max_steps):
+        system.step()
+        d = system.diagnostics()
+        if d["contacts_per_particle"] > 0 or d["wall_contacts"] > 0:
+            touched = True
+        elif touched:
+            return
+    raise AssertionError("collision did not end")
+
+
+def test_damping_ratio_limits():
+    assert damping_ratio(1.0) == 0.0
+    # collision time of an undamped contact is pi sqrt(m*/k)
+    assert collision_time(2e4, 1e-4, 1.0) == pytest.approx(math.pi * math.sqrt(1e-4 / 2e4))
+    # weak damping: clipping hardly matters and the unclipped formula is recovered
+    e = 0.999
+    assert damping_ratio(e) == pytest.approx(-math.log(e) / math.sqrt(math.pi ** 2 + math.log(e) ** 2), rel=2e-3)
+
+
+@pytest.mark.parametrize("restitution", [0.1, 0.43, 0.8])
+def test_damping_ratio_against_direct_ode_integration(restitution):
+    """Integrate m x'' = -max(k x + eta x', 0) to the moment the force vanishes (scipy, tight
+    tolerances) and compare the rebound speed and duration with the closed form used."""
+    from scipy.integrate import solve_ivp
+    k, m = 2e4, 5e-5
+    eta = 2 * damping_ratio(restitution) * math.sqrt(m * k)
+
+    def rhs(t, y):
+        return [y[1], -(k * y[0] + eta * y[1]) / m]
+
+    def force_vanishes(t, y):
+        return k * y[0] + eta * y[1]
+    force_vanishes.terminal = True
+    force_vanishes.direction = -1
+    sol = solve_ivp(rhs, (0, 1.0), [0.0, 1.0], events=force_vanishes, rtol=1e-12, atol=1e-15,
+                    first_step=1e-9)
+    assert -sol.y_events[0][0][1] == pytest.approx(restitution, rel=1e-7)
+    assert sol.t_events[0][0] == pytest.approx(collision_time(k, m, restitution), rel=1e-7)
+
+
+def head_on_restitution(restitution, steps_per_collision, phase, v=0.8):
+    """Measured restitution of a head-on sphere pair whose first touch falls at ``phase`` (0-1)
+    of a time step."""
+    contact = ContactModel(restitution=restitution)
+    dt = contact.collision_time(DENSITY * math.pi / 6 * SPHERE_D ** 3) / steps_per_collision
+    gap = v * dt * (3 + phase)
+    s = make_system([[0.05, 0.05, 0.05], [0.05 + SPHERE_D + gap, 0.05, 0.05]], R,
+                    velocity=[[v / 2, 0, 0], [-v / 2, 0, 0]], contact=contact, dt=dt)
+    run_until_separated(s)
+    vel = by_id(s, "velocity")
+    assert vel[0, 0] + vel[1, 0] == pytest.approx(0.0, abs=1e-14)  # momentum
+    return (vel[1, 0] - vel[0, 0]) / v
+
+
+@pytest.mark.parametrize("restitution", [0.43, 0.7, 0.95])
+@pytest.mark.parametrize("phase", [0.0, 0.5, 0.9])
+def test_head_on_sphere_collision_reproduces_restitution(restitution, phase):
+    assert head_on_restitution(restitution, 50, phase) == pytest.approx(restitution, rel=0.01)
+
+
+def test_restitution_error_is_phase_independent_and_second_order():
+    """At the paper's dt = 1e-5 s (t_c/14 for the seed's particles) the restitution does not depend on
+    where in a step the touch falls (onset correction), and the remaining error is second order."""
+    contact = ContactModel(restitution=0.43)
+    ratio = contact.collision_time(DENSITY * math.pi / 6 * SPHERE_D ** 3) / 1e-5
+    assert 13 < ratio < 15
+    phases = np.linspace(0, 1, 8, endpoint=False)
+    coarse = np.array([head_on_restitution(0.43, ratio, ph) for ph in phases]) / 0.43 - 1
+    fine = np.array([head_on_restitution(0.43, 2 * ratio, ph) for ph in phases]) / 0.43 - 1
+    assert np.ptp(coarse) < 0.005
+    assert np.abs(coarse).max() < 0.02
+    assert np.abs(coarse).mean() / np.abs(fine).mean() > 3.5  # halving dt cuts the error ~4x
+
+
+def test_sphere_wall_collision_reproduces_restitution():
+    s = make_system([[0.05, 0.05, R * 1.05]], R, velocity=[[0, 0, -1.0]], box=WALLED, steps_per_collision=200)
+    run_until_separated(s)
+    assert by_id(s, "velocity")[0, 2] == pytest.approx(0.43, rel=0.01)
+
+
+@pytest.mark.parametrize("arrangement", ["side_by_side", "crossed"])
+def test_spherocylinder_collisions_reproduce_restitution(arrangement):
+    r, h = 1.5e-3, 4.5e-3
+    # approach along z; rods lie in the x-y plane, parallel or crossed at right angles
+    axis = [[1, 0, 0], [1, 0, 0]] if arrangement == "side_by_side" else [[1, 0, 0], [0, 1, 0]]
+    s = make_system([[0.05, 0.05, 0.05], [0.05, 0.05, 0.05 + 2 * r * 1.02]], r, h, axis=axis,
+                    velocity=[[0, 0, 0.3], [0, 0, -0.3]], steps_per_collision=200)
+    run_until_separated(s)
+    vel = by_id(s, "velocity")
+    assert (vel[1, 2] - vel[0, 2]) / 0.6 == pytest.approx(0.43, rel=0.01)
+    # central impact: no spin picked up
+    assert np.abs(by_id(s, "angular_velocity")).max() < 1e-6
+
+
+@pytest.mark.parametrize("tangential_speed", [0.05, 0.3, 2.0])
+def test_oblique_wall_impact_respects_coulomb_limit(tangential_speed):
+    mu = 0.3
+    vn = 0.5
+    s = make_system([[0.05, 0.05, R * 1.02]], R, velocity=[[tangential_speed, 0, -vn]], box=WALLED,
+                    contact=ContactModel(friction=mu, rolling_friction=0.0))
+    m = s.particles.mass[0]
+    run_until_separated(s)
+    v = by_id(s, "velocity")[0]
+    impulse_n = m * (v[2] + vn)
+    impulse_t = m * abs(v[0] - tangential_speed)
+    assert impulse_t <= mu * impulse_n * (1 + 1e-9)
+    if tangential_speed == 2.0:
+        # sliding throughout: the tangential impulse is exactly mu times the normal one
+        assert impulse_t == pytest.approx(mu * impulse_n, rel=0.01)
+
+
+def test_sliding_sphere_reaches_pure_rolling_at_five_sevenths():
+    mu = 0.3
+    v0 = 0.5
+    contact = ContactModel(friction=mu, rolling_friction=0.0)
+    s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
+                    box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
+    # settle vertically first would take long; start at the static overlap instead
+    m = s.particles.mass[0]
+    s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
+    s.reference_position[:] = s.particles.position
+    s.compute_forces()
+    slide_time = 2 * v0 / (7 * mu * 9.81)  # analytical time to reach rolling
+    s.step(int(1.5 * slide_time / s.dt))
+    v = by_id(s, "velocity")[0, 0]
+    w = by_id(s, "angular_velocity")[0, 1]
+    assert v == pytest.approx(5 / 7 * v0, rel=0.01)
+    assert w * R == pytest.approx(v, rel=0.01)  # rolling without slip
+
+
+def test_rolling_friction_decelerates_rolling_sphere():
+    """Constant directional torque: a rolling sphere decelerates at 5/7 mu_r g (energy balance)."""
+    mu_r = 0.05
+    contact = ContactModel(friction=0.5, rolling_friction=mu_r)
+    v0 = 0.3
+    s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
+                    box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
+    m = s.particles.mass[0]
+    s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
+    s.particles.angular_momentum[0, 1] = s.particles.inertia[0, 0] * v0 / R
+    s.reference_position[:] = s.particles.position
+    s.compute_forces()
+    t = 0.05
+    s.step(int(t / s.dt))
+    v = by_id(s, "velocity")[0, 0]
+    assert v == pytest.approx(v0 - 5 / 7 * mu_r * 9.81 * t, rel=0.02)
+
+
+def test_newton_third_law_and_angular_momentum_pair_by_pair():
+    """Random overlapping spherocylinders: each pair's forces cancel and its torques cancel the
+    moment of the force couple (no angular momentum created by a contact)."""
+    rng = np.random.default_rng(5)
+    n = 40
+    r, h = 1.5e-3, 4.5e-3
+    pos = 0.01 + rng.uniform(0, 0.012, size=(n, 3))
+    axis = rng.normal(size=(n, 3))
+    vel = rng.normal(scale=0.1, size=(n, 3))
+    box = Box((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), (True, True, True))
+    s = make_system(pos, r, h, velocity=vel, axis=axis, box=box)
+    s.particles.angular_momentum[:] = rng.normal(scale=1e-9, size=(n, 3))
+    s.step(3)
+    p = s.particles
+    width = s.neighbours.shape[1]
+    checked = 0
+    for i in range(n):
+        for k in range(s.counts[i]):
+            slot = i * width + k
+            j = s.neighbours[i, k]
+            f = s._pair_force[slot]
+            if not f.any():
+                continue
+            rij = p.position[i] - p.position[j]
+            total_moment = s._pair_torque_owner[slot] + s._pair_torque_partner[slot] + np.cross(rij, f)
+            scale = np.linalg.norm(f) * r
+            assert np.linalg.norm(total_moment) <= 1e-12 * scale
+            checked += 1
+    assert checked > 10
+    # and the reduction keeps it: total contact force and torque about the origin vanish
+    assert np.abs(p.contact_force.sum(axis=0)).max() <= 1e-12 * np.abs(p.contact_force).max()
+    total_torque = (np.cross(p.position, p.contact_force) + p.contact_torque).sum(axis=0)
+    assert np.abs(total_torque).max() <= 1e-12 * np.abs(p.contact_force).max() * 0.02
