@@ -124,8 +124,8 @@ class TimeConfig:
     dem_step: float = spec(1.0e-5, unit="time", gt=0.0, doc="DEM time step [s]")
     end: float = spec(0.1, unit="time", gt=0.0, doc="simulated end time [s]")
     stop_when_settled: bool = spec(False, kind="bool", doc="end early once the bed is at rest")
-    settled_speed: float = spec(0.01, unit="velocity", gt=0.0,
-                                doc="'at rest' means every particle slower than this [m/s]")
+    settled_speed: float = spec(0.005, unit="velocity", gt=0.0,
+                                doc="'at rest' means a root-mean-square particle speed below this [m/s]")
     min_time: float = spec(0.0, unit="time", ge=0.0, doc="never stop as settled before this time [s]")
 
 

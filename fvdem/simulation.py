@@ -30,7 +30,7 @@ from .io.vtk import write_particles_vtu, write_pvd
 CHECKPOINT = "checkpoint.npz"
 FINAL_STATE = "final_state.npz"
 TIMESERIES_COLUMNS = ("time", "kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle",
-                      "bed_top", "max_speed")
+                      "bed_top", "rms_speed", "max_speed")
 
 
 class OutputError(RuntimeError):
@@ -224,7 +224,7 @@ class Simulation:
             if self.out is not None:
                 self._timeseries().append(diag)
             t = self.case.time
-            if t.stop_when_settled and self.time >= t.min_time and step > 0 and diag["max_speed"] < t.settled_speed:
+            if t.stop_when_settled and self.time >= t.min_time and step > 0 and diag["rms_speed"] < t.settled_speed:
                 self.writers.settled = True
         if self.out is None:
             return
@@ -258,7 +258,7 @@ class Simulation:
             "collision_time": self.case.collision_time(),
             "neighbour_rebuilds": self.dem.rebuild_count,
             **{k: diag[k] for k in ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle",
-                                    "wall_contacts", "max_speed")},
+                                    "wall_contacts", "rms_speed", "max_speed")},
         }
         summary.update(packed_bed_summary(self.particles, self.dem.box))
         return summary

@@ -1,9 +1,14 @@
 """Contact force kernels: per-contact results first, then one race-free reduction per particle.
 
-``pair_forces`` evaluates every listed pair once (parallel over owner rows) and stores the force on
-the owner and the torques on owner and partner in the pair's slot. ``gather_forces`` then sums, for
-each particle, its own slots and (negated force, partner torque) the slots where it is partner,
-and adds its wall contacts. Newton's third law holds pair by pair by construction.
+``pair_forces`` evaluates every listed pair once (parallel over owner rows). The owner's side is
+summed in its own row (``owner_sum``); the partner's side ``[-F, torque on partner]`` is stored in
+a slot reserved for that pair inside the partner's own contiguous block of ``partner_result``
+(``partner_slot`` maps pair slot -> block slot; each block slot has exactly one writer, so no races).
+``gather_forces`` then adds, per particle, its owner sum, its contiguous partner block and its wall
+contacts. The partner side is thus a scattered *store* in the pair kernel and a contiguous *load* in
+the reduction (storing per-pair results and gathering them by a reverse index made every partner
+read a dependent cache miss and cost twice as much). Newton's third law holds pair by pair by
+construction: the partner's force is the exact negative of the owner's.
 
 Walls are the six faces of the axis-aligned box that are not periodic. A spherocylinder touches a
 wall at each end point that is within its radius of the wall (two contacts for a rod lying flat,
@@ -18,20 +23,27 @@ from numba import njit, prange
 from .contact_law import contact_force
 from .geometry import minimum_image, segment_parameters
 
+# fast-math without 'nnan'/'ninf': FMA contraction, reciprocals, reassociation; NaN and Inf still
+# propagate so a blown-up state is detected. Results stay deterministic for a given build.
+FASTMATH = {"contract", "arcp", "nsz", "afn", "reassoc"}
+
 
 @njit(cache=True, inline="always")
 def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
-                neighbours, counts, history, pair_force, pair_torque_owner, pair_torque_partner,
-                row_max_overlap, row_contacts, box_length, periodic, params):
-    """Contact force and torques of every listed pair; fills the per-slot result arrays.
+                neighbours, counts, history, partner_slot, owner_sum, partner_result, row_max_overlap,
+                row_contacts, box_length, periodic, params, spheres_only):
+    """Contact force and torques of every listed pair.
 
-    ``history`` (4 columns, see ``contact_law``), ``pair_force`` etc. (3 columns) are flat ``(N * width, .)`` arrays indexed by slot
-    ``i * width + k``. ``row_max_overlap[i]`` gets the largest overlap/diameter of row i and
+    ``history`` (4 columns, see ``contact_law``) is a flat ``(N * width, 4)`` array indexed by pair
+    slot ``i * width + k``; ``owner_sum`` (N, 6) gets each row's ``[force, torque]`` sum;
+    ``partner_result[partner_slot[slot]]`` gets ``[-force, torque on partner]``. Partner entries of
+    non-touching pairs hold zeros: cleared once when a contact ends (a list rebuild starts from
+    zeros), so steady non-contacts cost no writes. ``row_max_overlap[i]`` gets the largest overlap/diameter of row i and
     ``row_contacts[i]`` the number of touching pairs in row i.
     """
     n = position.shape[0]
@@ -39,6 +51,12 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
     for i in prange(n):
         max_overlap = 0.0
         touching = 0
+        sfx = 0.0
+        sfy = 0.0
+        sfz = 0.0
+        stx = 0.0
+        sty = 0.0
+        stz = 0.0
         ai0, ai1, ai2 = axis[i, 0], axis[i, 1], axis[i, 2]
         for k in range(counts[i]):
             j = neighbours[i, k]
@@ -46,20 +64,26 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             rx = minimum_image(position[i, 0] - position[j, 0], box_length[0], periodic[0])
             ry = minimum_image(position[i, 1] - position[j, 1], box_length[1], periodic[1])
             rz = minimum_image(position[i, 2] - position[j, 2], box_length[2], periodic[2])
-            s, t = segment_parameters(rx, ry, rz, ai0, ai1, ai2, half_length[i],
-                                      axis[j, 0], axis[j, 1], axis[j, 2], half_length[j])
-            dx = rx + s * ai0 - t * axis[j, 0]
-            dy = ry + s * ai1 - t * axis[j, 1]
-            dz = rz + s * ai2 - t * axis[j, 2]
+            if spheres_only:
+                s = 0.0
+                t = 0.0
+                dx, dy, dz = rx, ry, rz
+            else:
+                s, t = segment_parameters(rx, ry, rz, ai0, ai1, ai2, half_length[i],
+                                          axis[j, 0], axis[j, 1], axis[j, 2], half_length[j])
+                dx = rx + s * ai0 - t * axis[j, 0]
+                dy = ry + s * ai1 - t * axis[j, 1]
+                dz = rz + s * ai2 - t * axis[j, 2]
             dist2 = dx * dx + dy * dy + dz * dz
             radius_sum = radius[i] + radius[j]
             if dist2 >= radius_sum * radius_sum:
-                for c in range(4):
-                    history[slot, c] = 0.0
-                for c in range(3):
-                    pair_force[slot, c] = 0.0
-                    pair_torque_owner[slot, c] = 0.0
-                    pair_torque_partner[slot, c] = 0.0
+                # not touching: forget the history and zero the result, once, when the contact ends
+                if history[slot, 3] != 0.0:
+                    for c in range(4):
+                        history[slot, c] = 0.0
+                    dest = partner_slot[slot]
+                    for c in range(6):
+                        partner_result[dest, c] = 0.0
                 continue
             dist = math.sqrt(dist2)
             if dist > 1e-14 * radius_sum:
@@ -87,60 +111,66 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
                 history, slot, overlap, nx, ny, nz, vx, vy, vz,
                 wi0 - wj0, wi1 - wj1, wi2 - wj2, reduced_mass, r_eff, inertia_eff, params)
-            pair_force[slot, 0] = fx
-            pair_force[slot, 1] = fy
-            pair_force[slot, 2] = fz
             ti = _cross(lix, liy, liz, fx, fy, fz)
             tj = _cross(ljx, ljy, ljz, -fx, -fy, -fz)
-            pair_torque_owner[slot, 0] = ti[0] + trx
-            pair_torque_owner[slot, 1] = ti[1] + tr_y
-            pair_torque_owner[slot, 2] = ti[2] + trz
-            pair_torque_partner[slot, 0] = tj[0] - trx
-            pair_torque_partner[slot, 1] = tj[1] - tr_y
-            pair_torque_partner[slot, 2] = tj[2] - trz
+            sfx += fx
+            sfy += fy
+            sfz += fz
+            stx += ti[0] + trx
+            sty += ti[1] + tr_y
+            stz += ti[2] + trz
+            dest = partner_slot[slot]
+            partner_result[dest, 0] = -fx
+            partner_result[dest, 1] = -fy
+            partner_result[dest, 2] = -fz
+            partner_result[dest, 3] = tj[0] - trx
+            partner_result[dest, 4] = tj[1] - tr_y
+            partner_result[dest, 5] = tj[2] - trz
             touching += 1
             ratio = overlap / (2.0 * min(radius[i], radius[j]))
             if ratio > max_overlap:
                 max_overlap = ratio
+        owner_sum[i, 0] = sfx
+        owner_sum[i, 1] = sfy
+        owner_sum[i, 2] = sfz
+        owner_sum[i, 3] = stx
+        owner_sum[i, 4] = sty
+        owner_sum[i, 5] = stz
         row_max_overlap[i] = max_overlap
         row_contacts[i] = touching
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
 def gather_forces(position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
-                  counts, width, reverse, reverse_counts, pair_force, pair_torque_owner,
-                  pair_torque_partner, wall_active, box_lo, box_hi, wall_history, params,
+                  owner_sum, partner_result, partner_width, partner_counts, wall_active, box_lo, box_hi, wall_history,
+                  wall_mask, params,
                   contact_force_out, contact_torque_out, row_max_overlap, row_wall_contacts):
-    """Sum pair results per particle and add wall contacts (faces flagged in ``wall_active``:
-    x-, x+, y-, y+, z-, z+). ``wall_history`` is flat ``(N * 12, 4)``: slot ``(i*6 + face)*2 + end``."""
+    """Per particle: owner sum plus its partner block (``partner_counts[i]`` entries from
+    ``i * partner_width``) plus wall contacts (faces flagged in ``wall_active``:
+    x-, x+, y-, y+, z-, z+). ``wall_history`` is flat ``(N * 12, 4)``: slot ``(i*6 + face)*2 + end``;
+    bit ``face*2 + end`` of ``wall_mask[i]`` is set while that slot holds a contact, so particles
+    away from walls cost one integer read instead of twelve history rows."""
     n = position.shape[0]
     for i in prange(n):
-        fx = 0.0
-        fy = 0.0
-        fz = 0.0
-        tx = 0.0
-        ty = 0.0
-        tz = 0.0
-        base = i * width
-        for k in range(counts[i]):
-            slot = base + k
-            fx += pair_force[slot, 0]
-            fy += pair_force[slot, 1]
-            fz += pair_force[slot, 2]
-            tx += pair_torque_owner[slot, 0]
-            ty += pair_torque_owner[slot, 1]
-            tz += pair_torque_owner[slot, 2]
-        for m in range(reverse_counts[i]):
-            slot = reverse[i, m]
-            fx -= pair_force[slot, 0]
-            fy -= pair_force[slot, 1]
-            fz -= pair_force[slot, 2]
-            tx += pair_torque_partner[slot, 0]
-            ty += pair_torque_partner[slot, 1]
-            tz += pair_torque_partner[slot, 2]
+        fx = owner_sum[i, 0]
+        fy = owner_sum[i, 1]
+        fz = owner_sum[i, 2]
+        tx = owner_sum[i, 3]
+        ty = owner_sum[i, 4]
+        tz = owner_sum[i, 5]
+        base = i * partner_width
+        for m in range(partner_counts[i]):
+            slot = base + m
+            fx += partner_result[slot, 0]
+            fy += partner_result[slot, 1]
+            fz += partner_result[slot, 2]
+            tx += partner_result[slot, 3]
+            ty += partner_result[slot, 4]
+            tz += partner_result[slot, 5]
         # walls
         wall_contacts = 0
         max_overlap = row_max_overlap[i]
+        mask = wall_mask[i]
         h = half_length[i]
         r = radius[i]
         n_ends = 2 if h > 0.0 else 1
@@ -150,6 +180,15 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
                 continue
             d = face // 2
             upper = face % 2 == 1
+            gap = box_hi[d] - position[i, d] if upper else position[i, d] - box_lo[d]
+            if gap >= r + h:  # out of reach of this wall: clear stale histories only
+                if mask & (3 << (2 * face)):
+                    for end in range(2):
+                        slot = (i * 6 + face) * 2 + end
+                        for c in range(4):
+                            wall_history[slot, c] = 0.0
+                    mask &= ~(3 << (2 * face))
+                continue
             for end in range(n_ends):
                 sign = -1.0 if end == 0 else 1.0
                 ex = sign * h * axis[i, 0]
@@ -159,10 +198,14 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
                 dist = box_hi[d] - e_d if upper else e_d - box_lo[d]
                 slot = (i * 6 + face) * 2 + end
                 overlap = r - dist
+                bit = 1 << (2 * face + end)
                 if overlap <= 0.0:
-                    for c in range(4):
-                        wall_history[slot, c] = 0.0
+                    if mask & bit:
+                        for c in range(4):
+                            wall_history[slot, c] = 0.0
+                        mask &= ~bit
                     continue
+                mask |= bit
                 nd = -1.0 if upper else 1.0
                 nx = nd if d == 0 else 0.0
                 ny = nd if d == 1 else 0.0
@@ -195,3 +238,4 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
         contact_torque_out[i, 2] = tz
         row_max_overlap[i] = max_overlap
         row_wall_contacts[i] = wall_contacts
+        wall_mask[i] = mask

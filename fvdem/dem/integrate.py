@@ -6,10 +6,11 @@ inertia, ``w = R I_body^-1 R^T L``; for an axisymmetric body with world axis ``a
 
     w = L / I_t + (1/I_a - 1/I_t) (L . a) a          (I_t transverse, I_a axial inertia)
 
-which is Euler's equations in the body frame without forming R. The drift rotates the quaternion
-by ``exp(w_mid dt)`` with ``w_mid`` evaluated at the half-rotated axis (second order); for a
-torque-free axisymmetric body the axis then precesses about the fixed ``L`` at exactly
-``|L| / I_t``, so angular momentum and kinetic energy are conserved to round-off.
+which is Euler's equations in the body frame without forming R. The drift applies the exact
+torque-free motion of a symmetric top for the (half-kicked) L: a precession about L by
+``|L| dt / I_t`` times a spin about the body axis by ``(L.a)(1/I_a - 1/I_t) dt``. Torques enter
+through the symmetric kicks of L (a second-order splitting); without torque, angular momentum is
+kept exactly and kinetic energy to round-off.
 
 Spheres (``half_length == 0``) skip the orientation update altogether.
 """
@@ -24,23 +25,6 @@ from numba import njit, prange
 def _omega(lx, ly, lz, ax, ay, az, i_t, i_a):
     la = (lx * ax + ly * ay + lz * az) * (1.0 / i_a - 1.0 / i_t)
     return lx / i_t + la * ax, ly / i_t + la * ay, lz / i_t + la * az
-
-
-@njit(cache=True, inline="always")
-def _rotate(vx, vy, vz, wx, wy, wz, tau):
-    """Rotate v by the rotation vector w * tau (Rodrigues)."""
-    wn = math.sqrt(wx * wx + wy * wy + wz * wz)
-    theta = wn * tau
-    if theta == 0.0:
-        return vx, vy, vz
-    kx, ky, kz = wx / wn, wy / wn, wz / wn
-    c = math.cos(theta)
-    s = math.sin(theta)
-    kv = kx * vx + ky * vy + kz * vz
-    cx, cy, cz = ky * vz - kz * vy, kz * vx - kx * vz, kx * vy - ky * vx
-    return (vx * c + cx * s + kx * kv * (1.0 - c),
-            vy * c + cy * s + ky * kv * (1.0 - c),
-            vz * c + cz * s + kz * kv * (1.0 - c))
 
 
 @njit(cache=True, inline="always")
@@ -89,29 +73,27 @@ def kick_drift(position, velocity, angular_momentum, angular_velocity, quaternio
         dz = position[i, 2] - reference_position[i, 2]
         moved = math.sqrt(dx * dx + dy * dy + dz * dz)
         if track_orientation and half_length[i] > 0.0:
-            ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
-            w0 = _omega(lx, ly, lz, ax, ay, az, i_t, i_a)
-            mx, my, mz = _rotate(ax, ay, az, w0[0], w0[1], w0[2], half_dt)
-            wx, wy, wz = _omega(lx, ly, lz, mx, my, mz, i_t, i_a)
-            wn = math.sqrt(wx * wx + wy * wy + wz * wz)
-            if wn > 0.0:
-                half_angle = 0.5 * wn * dt
-                sh = math.sin(half_angle) / wn
-                rw, rx, ry, rz = math.cos(half_angle), wx * sh, wy * sh, wz * sh
-                qw, qx, qy, qz = quaternion[i, 0], quaternion[i, 1], quaternion[i, 2], quaternion[i, 3]
-                nw = rw * qw - rx * qx - ry * qy - rz * qz
-                nx = rw * qx + rx * qw + ry * qz - rz * qy
-                ny = rw * qy - rx * qz + ry * qw + rz * qx
-                nz = rw * qz + rx * qy - ry * qx + rz * qw
-                norm = 1.0 / math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
-                nw *= norm
-                nx *= norm
-                ny *= norm
-                nz *= norm
-                quaternion[i, 0], quaternion[i, 1], quaternion[i, 2], quaternion[i, 3] = nw, nx, ny, nz
-                axis[i, 0] = 2.0 * (nx * nz + nw * ny)
-                axis[i, 1] = 2.0 * (ny * nz - nw * nx)
-                axis[i, 2] = 1.0 - 2.0 * (nx * nx + ny * ny)
+            # exact free rotation with L held over the drift: precession about L by |L| dt / I_t
+            # (world frame, left factor), spin about the body axis by (L.a)(1/I_a - 1/I_t) dt
+            # (body frame, right factor); L.a is invariant under the precession.
+            l_norm = math.sqrt(lx * lx + ly * ly + lz * lz)
+            spin = (lx * axis[i, 0] + ly * axis[i, 1] + lz * axis[i, 2]) * (1.0 / i_a - 1.0 / i_t) * dt
+            qw, qx, qy, qz = quaternion[i, 0], quaternion[i, 1], quaternion[i, 2], quaternion[i, 3]
+            if l_norm > 0.0:
+                half_angle = 0.5 * l_norm / i_t * dt
+                sh = math.sin(half_angle) / l_norm
+                rw, rx, ry, rz = math.cos(half_angle), lx * sh, ly * sh, lz * sh
+                qw, qx, qy, qz = (rw * qw - rx * qx - ry * qy - rz * qz, rw * qx + rx * qw + ry * qz - rz * qy,
+                                  rw * qy - rx * qz + ry * qw + rz * qx, rw * qz + rx * qy - ry * qx + rz * qw)
+            if spin != 0.0:
+                bw, bz = math.cos(0.5 * spin), math.sin(0.5 * spin)
+                qw, qx, qy, qz = qw * bw - qz * bz, qx * bw + qy * bz, qy * bw - qx * bz, qz * bw + qw * bz
+            norm = 1.0 / math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+            qw, qx, qy, qz = qw * norm, qx * norm, qy * norm, qz * norm
+            quaternion[i, 0], quaternion[i, 1], quaternion[i, 2], quaternion[i, 3] = qw, qx, qy, qz
+            axis[i, 0] = 2.0 * (qx * qz + qw * qy)
+            axis[i, 1] = 2.0 * (qy * qz - qw * qx)
+            axis[i, 2] = 1.0 - 2.0 * (qx * qx + qy * qy)
             w = _omega(lx, ly, lz, axis[i, 0], axis[i, 1], axis[i, 2], i_t, i_a)
             angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2] = w
             w = _omega(px, py, pz, axis[i, 0], axis[i, 1], axis[i, 2], i_t, i_a)

@@ -9,8 +9,8 @@ the integrator tracks that bound and asks for a rebuild.
 Rows are fixed-width (``max_neighbours`` columns, grown when needed). Each contact's
 tangential history lives in the slot of its pair; on a rebuild the histories are carried over
 to the new slots (through the particle permutation of the cell sort), with their sign flipped
-when the pair's owner changes. A reverse index lists, for each particle, the slots where it is
-the partner, so forces are reduced without write conflicts.
+when the pair's owner changes. Each pair also gets a slot in its partner's own block of partner
+results (``build_partner_slots``), so forces are reduced without write conflicts.
 """
 from __future__ import annotations
 
@@ -160,20 +160,22 @@ def transfer_history(old_neighbours, old_counts, old_history, new_neighbours, ne
 
 
 @njit(cache=True)
-def build_reverse_index(neighbours, counts, width, reverse, reverse_counts):
-    """``reverse[j, :reverse_counts[j]]`` lists the flat slots ``i * width + k`` with partner j.
-    Returns the largest reverse row length (the caller grows ``reverse`` if it overflowed)."""
+def build_partner_slots(neighbours, counts, partner_counts, partner_slot):
+    """Reserve, for every listed pair (slot ``i * width + k``, partner j), an entry in j's own block
+    of the partner-result array: ``partner_slot[slot] = j * partner_width + m``. ``partner_counts[j]``
+    gets the number of pairs in which j is the partner; ``partner_width`` is their maximum.
+    Returns ``partner_width``."""
     n = counts.shape[0]
-    reverse_counts[:] = 0
-    cap = reverse.shape[1]
-    longest = 0
+    width = neighbours.shape[1]
+    partner_counts[:] = 0
+    for i in range(n):
+        for k in range(counts[i]):
+            partner_counts[neighbours[i, k]] += 1
+    partner_width = max(1, partner_counts.max()) if n else 1
+    partner_counts[:] = 0
     for i in range(n):
         for k in range(counts[i]):
             j = neighbours[i, k]
-            m = reverse_counts[j]
-            if m < cap:
-                reverse[j, m] = i * width + k
-            reverse_counts[j] = m + 1
-            if m + 1 > longest:
-                longest = m + 1
-    return longest
+            partner_slot[i * width + k] = j * partner_width + partner_counts[j]
+            partner_counts[j] += 1
+    return partner_width

@@ -17,7 +17,7 @@ import numpy as np
 from .contact_law import HISTORY_COLUMNS, collision_time, contact_parameters
 from .forces import gather_forces, pair_forces
 from .integrate import kick, kick_drift
-from .neighbours import (build_half_list, build_reverse_index, cell_indices, cell_starts,
+from .neighbours import (build_half_list, build_partner_slots, cell_indices, cell_starts,
                          transfer_history, wrap_periodic)
 from .particles import ParticleArrays
 
@@ -103,15 +103,15 @@ class DEMSystem:
         self.reference_position = particles.position.copy()
         self.reference_axis = particles.axis.copy()
         self.wall_history = np.zeros((n * 12, HISTORY_COLUMNS))
+        self.wall_mask = np.zeros(n, np.int64)  # bit face*2+end: that wall slot holds a contact
         self.neighbours = np.zeros((n, 1), np.int64)
         self.counts = np.zeros(n, np.int64)
         self.history = np.zeros((n, HISTORY_COLUMNS))
-        self._reverse = np.zeros((n, 8), np.int64)
-        self._reverse_counts = np.zeros(n, np.int64)
+        self._partner_counts = np.zeros(n, np.int64)
+        self._owner_sum = np.zeros((n, 6))
         self._row_max_overlap = np.zeros(n)
         self._row_contacts = np.zeros(n, np.int64)
         self._row_wall_contacts = np.zeros(n, np.int64)
-        self._allocate_pair_buffers(1)
         self.rebuild()
         self.compute_forces()
 
@@ -141,21 +141,16 @@ class DEMSystem:
     def compute_forces(self) -> None:
         p = self.particles
         pair_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
-                    p.half_length, p.mass, p.inertia, self.neighbours, self.counts, self.history, self._pair_force, self._pair_torque_owner,
-                    self._pair_torque_partner, self._row_max_overlap, self._row_contacts, self._box_len,
-                    self._periodic, self.params)
+                    p.half_length, p.mass, p.inertia, self.neighbours, self.counts, self.history, self._partner_slot,
+                    self._owner_sum, self._partner_result, self._row_max_overlap, self._row_contacts, self._box_len, self._periodic, self.params,
+                    not self.track_orientation)
         gather_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
-                      p.half_length, p.mass, p.inertia, self.counts, self.neighbours.shape[1], self._reverse, self._reverse_counts,
-                      self._pair_force, self._pair_torque_owner, self._pair_torque_partner, self._walls,
-                      self._box_lo, self._box_hi, self.wall_history, self.params, p.contact_force,
+                      p.half_length, p.mass, p.inertia, self._owner_sum, self._partner_result,
+                      self._partner_width, self._partner_counts, self._walls,
+                      self._box_lo, self._box_hi, self.wall_history, self.wall_mask, self.params, p.contact_force,
                       p.contact_torque, self._row_max_overlap, self._row_wall_contacts)
 
     # ------------------------------------------------------------------ neighbour list
-    def _allocate_pair_buffers(self, width: int) -> None:
-        slots = self.particles.count * width
-        self._pair_force = np.zeros((slots, 3))
-        self._pair_torque_owner = np.zeros((slots, 3))
-        self._pair_torque_partner = np.zeros((slots, 3))
 
     def rebuild(self) -> None:
         """Sort particles by cell, rebuild the half list, carry contact histories over."""
@@ -168,6 +163,7 @@ class DEMSystem:
             p.permute(order)
             self.wall_history = np.ascontiguousarray(self.wall_history.reshape(n, 12, HISTORY_COLUMNS)[order].reshape(n * 12, HISTORY_COLUMNS))
             self._cell_of = self._cell_of[order]
+            self.wall_mask = np.ascontiguousarray(self.wall_mask[order])
             self._predicted_velocity = np.ascontiguousarray(self._predicted_velocity[order])
             self._predicted_angular_velocity = np.ascontiguousarray(self._predicted_angular_velocity[order])
         total_cells = int(np.prod(self._n_cells))
@@ -182,34 +178,34 @@ class DEMSystem:
         history = np.zeros((n * width, HISTORY_COLUMNS))
         transfer_history(self.neighbours, self.counts, self.history, neighbours, counts, history, order,
                          self.neighbours.shape[1], width)
-        if width != self.neighbours.shape[1]:
-            self._allocate_pair_buffers(width)
         self.neighbours, self.counts, self.history = neighbours, counts, history
-        self._index_reverse()
+        self._index_partners()
         self.reference_position[:] = p.position
         self.reference_axis[:] = p.axis
         self.rebuild_count += 1
 
-    def _index_reverse(self) -> None:
-        width = self.neighbours.shape[1]
-        longest = build_reverse_index(self.neighbours, self.counts, width, self._reverse, self._reverse_counts)
-        if longest > self._reverse.shape[1]:
-            self._reverse = np.zeros((self.particles.count, longest + 4), np.int64)
-            build_reverse_index(self.neighbours, self.counts, width, self._reverse, self._reverse_counts)
+    def _index_partners(self) -> None:
+        """Reserve partner-result slots for the current list; all partner results start at zero."""
+        n = self.particles.count
+        self._partner_slot = np.empty(n * self.neighbours.shape[1], np.int64)
+        self._partner_width = int(build_partner_slots(self.neighbours, self.counts, self._partner_counts,
+                                                      self._partner_slot))
+        self._partner_result = np.zeros((n * self._partner_width, 6))
 
     # ------------------------------------------------------------------ diagnostics
     def diagnostics(self) -> dict:
         """Scalar diagnostics of the current state (all floats, SI)."""
         n = self.particles.count
         pair_contacts = int(self._row_contacts.sum())
+        speed2 = np.einsum("ij,ij->i", self.particles.velocity, self.particles.velocity)
         return {
             "time": self.time,
             "kinetic_energy": self.particles.kinetic_energy(),
             "max_overlap_over_diameter": float(self._row_max_overlap.max()) if n else 0.0,
             "contacts_per_particle": 2.0 * pair_contacts / n if n else 0.0,
             "wall_contacts": int(self._row_wall_contacts.sum()),
-            "max_speed": float(np.sqrt(np.max(np.einsum("ij,ij->i", self.particles.velocity,
-                                                         self.particles.velocity)))) if n else 0.0,
+            "max_speed": float(np.sqrt(speed2.max())) if n else 0.0,
+            "rms_speed": float(np.sqrt(speed2.mean())) if n else 0.0,
         }
 
     def check_health(self) -> None:
@@ -235,7 +231,7 @@ class DEMSystem:
         """Everything needed to continue bit-for-bit (arrays and counters)."""
         data = {f"particles.{k}": v for k, v in self.particles.as_dict().items()}
         data.update({
-            "dem.wall_history": self.wall_history, "dem.neighbours": self.neighbours, "dem.counts": self.counts,
+            "dem.wall_history": self.wall_history, "dem.wall_mask": self.wall_mask, "dem.neighbours": self.neighbours, "dem.counts": self.counts,
             "dem.history": self.history, "dem.reference_position": self.reference_position,
             "dem.reference_axis": self.reference_axis,
             "dem.counters": np.array([self.step_count, self.rebuild_count], np.int64),
@@ -247,20 +243,20 @@ class DEMSystem:
         self.particles = ParticleArrays.from_dict({k.split(".", 1)[1]: data[k] for k in data
                                                    if k.startswith("particles.")})
         self.wall_history = np.ascontiguousarray(data["dem.wall_history"])
+        self.wall_mask = np.ascontiguousarray(data["dem.wall_mask"])
         self.neighbours = np.ascontiguousarray(data["dem.neighbours"])
         self.counts = np.ascontiguousarray(data["dem.counts"])
         self.history = np.ascontiguousarray(data["dem.history"])
         self.reference_position = np.ascontiguousarray(data["dem.reference_position"])
         self.reference_axis = np.ascontiguousarray(data["dem.reference_axis"])
         self.step_count, self.rebuild_count = (int(x) for x in data["dem.counters"])
-        self._allocate_pair_buffers(self.neighbours.shape[1])
-        self._index_reverse()
+        self._index_partners()
         self.compute_forces_diagnostics_only()
 
     def compute_forces_diagnostics_only(self) -> None:
         """Refresh per-row diagnostics after a restore without touching forces or histories."""
         saved = (self.particles.contact_force.copy(), self.particles.contact_torque.copy(),
-                 self.history.copy(), self.wall_history.copy())
+                 self.history.copy(), self.wall_history.copy(), self.wall_mask.copy())
         self.compute_forces()
         self.particles.contact_force[:], self.particles.contact_torque[:] = saved[0], saved[1]
-        self.history[:], self.wall_history[:] = saved[2], saved[3]
+        self.history[:], self.wall_history[:], self.wall_mask[:] = saved[2], saved[3], saved[4]
