@@ -154,7 +154,8 @@ class ParticleArrays:
 
     @classmethod
     def from_dict(cls, data) -> "ParticleArrays":
-        return cls(**{f.name: np.ascontiguousarray(data[f.name]) for f in fields(cls)})
+        """New arrays (always copies, never views of ``data``)."""
+        return cls(**{f.name: np.array(data[f.name], order="C", copy=True) for f in fields(cls)})
 
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy [J]."""
