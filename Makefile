@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test venv clean bench
+.PHONY: demo test venv clean bench clean-cache
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -21,10 +21,14 @@ test: $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/fvdem run cases/demo.toml --out demo_out --overwrite
-	@echo "demo written to demo_out/ (open demo_out/particles.pvd in ParaView)"
+	$(BIN)/fvdem report demo_out
+	@echo "demo written to demo_out/: timeseries.png, colours.png; open demo_out/particles.pvd in ParaView"
 
 bench: $(STAMP)
 	$(BIN)/python tools/bench_dem.py --json
 
 clean:
 	rm -rf $(VENV) build *.egg-info demo_out
+
+clean-cache:  # numba caches are invalidated only by edits to a kernel's own file
+	find fvdem -name '*.nbi' -delete -o -name '*.nbc' -delete

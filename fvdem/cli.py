@@ -1,4 +1,4 @@
-"""Command line: ``fvdem run | check | info | schema``.
+"""Command line: ``fvdem run | check | report | info | schema``.
 
 Input problems (case file, options, output folder) exit with code 2 and a message, never a
 traceback; a run that becomes unstable exits with code 3 and the cause.
@@ -47,6 +47,16 @@ def cmd_run(args) -> int:
     return 0
 
 
+def cmd_report(args) -> int:
+    from .analysis.plots import report
+    out = Path(args.out)
+    if not (out / "timeseries.csv").exists():
+        return _fail(f"{out} is not a run folder (no timeseries.csv)")
+    for path in report(out):
+        print(path)
+    return 0
+
+
 def cmd_info(args) -> int:
     import numba
     import numpy
@@ -78,6 +88,9 @@ def make_parser() -> argparse.ArgumentParser:
     check.add_argument("case")
     check.add_argument("--set", action="append", metavar="KEY=VALUE")
     check.set_defaults(func=cmd_check)
+    report = sub.add_parser("report", help="write PNG plots for a run folder")
+    report.add_argument("out")
+    report.set_defaults(func=cmd_report)
     sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)
     sub.add_parser("schema", help="print the case-file reference (Markdown)").set_defaults(func=cmd_schema)
     return parser

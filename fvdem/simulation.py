@@ -198,6 +198,10 @@ class Simulation:
                 self._on_events(self.dem.step_count)
                 if bar is not None:
                     bar.update(self.time - bar.n)
+                    elapsed = _time.perf_counter() - wall0
+                    if elapsed > 0:
+                        bar.set_postfix_str(f"{(self.dem.step_count - start_step) / elapsed:.0f} steps/s",
+                                            refresh=False)
         finally:
             self._restore_signal_handlers(handlers)
             if bar is not None:
@@ -284,7 +288,7 @@ class Simulation:
         from tqdm import tqdm
         return tqdm(total=end_time, initial=self.time, unit="s", unit_scale=False, dynamic_ncols=True,
                     desc=f"{self.case.name} (simulated s)",
-                    bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.4f}/{total:.4f} s [{elapsed}<{remaining}]")
+                    bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.4f}/{total:.4f} s [{elapsed}<{remaining}{postfix}]")
 
     def _install_signal_handlers(self):
         if self.out is None:
