@@ -204,3 +204,34 @@ def test_contact_forces_of_a_cluster_sum_to_zero():
     assert np.abs(p.contact_force.sum(axis=0)).max() <= 1e-13 * scale * n
     total_torque = (np.cross(p.position, p.contact_force) + p.contact_torque).sum(axis=0)
     assert np.abs(total_torque).max() <= 1e-13 * scale * n * 0.02
+
+
+@pytest.mark.parametrize("where", ["side", "cap"])
+def test_sphere_on_spherocylinder_collision(where):
+    """A sphere hitting a rod's side (central: no spin) or its cap end: restitution of the normal
+    relative velocity, momentum conserved, contact point on the rod's surface."""
+    from fvdem.dem.particles import ParticleArrays
+    from fvdem.dem.system import DEMSystem
+    r_rod, h = 1.5e-3, 4.5e-3
+    r_sph = 2.0e-3
+    if where == "side":
+        pos = [[0.05, 0.05, 0.05], [0.05, 0.05, 0.05 + (r_rod + r_sph) * 1.01]]
+        approach = np.array([0.0, 0.0, 1.0])
+    else:
+        pos = [[0.05, 0.05, 0.05], [0.05 + h + (r_rod + r_sph) * 1.01, 0.05, 0.05]]
+        approach = np.array([1.0, 0.0, 0.0])
+    particles = ParticleArrays.create(np.array(pos), [r_rod, r_sph], [h, 0.0], DENSITY,
+                                      axis=[[1, 0, 0], [1, 0, 0]],
+                                      velocity=np.array([0.2 * approach, -0.2 * approach]))
+    contact = ContactModel(restitution=0.6, friction=0.3, rolling_friction=0.0)
+    box = Box((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), (True, True, True))
+    m = particles.mass
+    reduced = m[0] * m[1] / (m[0] + m[1])
+    dt = contact.collision_time(2 * reduced) / 100  # collision_time takes the particle mass (m*/2 inside)
+    s = DEMSystem(particles, box, contact, dt, gravity=(0, 0, 0))
+    p0 = (m[:, None] * by_id(s, "velocity")).sum(axis=0)
+    run_until_separated(s)
+    v = by_id(s, "velocity")
+    assert np.allclose((m[:, None] * v).sum(axis=0), p0, atol=1e-15)
+    assert ((v[1] - v[0]) @ approach) / 0.4 == pytest.approx(0.6, rel=0.01)
+    assert np.abs(by_id(s, "angular_velocity")).max() < 1e-6  # both impacts are central

@@ -17,8 +17,8 @@ def test_half_list_is_complete_and_unique_against_brute_force():
     p = s.particles
     listed = set()
     for i in range(n):
-        for k in range(s.counts[i]):
-            j = s.neighbours[i, k]
+        for slot in range(s.row_start[i], s.row_start[i + 1]):
+            j = s.neighbours[slot]
             assert j > i
             key = (p.ids[i], p.ids[j])
             assert key not in listed

@@ -35,19 +35,18 @@ def _cross(ax, ay, az, bx, by, bz):
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
-                neighbours, counts, history, partner_slot, owner_sum, partner_result, row_max_overlap,
+                row_start, neighbours, history, partner_slot, owner_sum, partner_result, row_max_overlap,
                 row_contacts, box_length, periodic, params, spheres_only):
     """Contact force and torques of every listed pair.
 
-    ``history`` (4 columns, see ``contact_law``) is a flat ``(N * width, 4)`` array indexed by pair
-    slot ``i * width + k``; ``owner_sum`` (N, 6) gets each row's ``[force, torque]`` sum;
+    Row i's pairs are the slots ``row_start[i] .. row_start[i+1]`` of the CSR list ``neighbours``;
+    ``history`` (4 columns, see ``contact_law``) is indexed by slot; ``owner_sum`` (N, 6) gets each row's ``[force, torque]`` sum;
     ``partner_result[partner_slot[slot]]`` gets ``[-force, torque on partner]``. Partner entries of
     non-touching pairs hold zeros: cleared once when a contact ends (a list rebuild starts from
     zeros), so steady non-contacts cost no writes. ``row_max_overlap[i]`` gets the largest overlap/diameter of row i and
     ``row_contacts[i]`` the number of touching pairs in row i.
     """
     n = position.shape[0]
-    width = neighbours.shape[1]
     for i in prange(n):
         max_overlap = 0.0
         touching = 0
@@ -58,9 +57,8 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
         sty = 0.0
         stz = 0.0
         ai0, ai1, ai2 = axis[i, 0], axis[i, 1], axis[i, 2]
-        for k in range(counts[i]):
-            j = neighbours[i, k]
-            slot = i * width + k
+        for slot in range(row_start[i], row_start[i + 1]):
+            j = neighbours[slot]
             rx = minimum_image(position[i, 0] - position[j, 0], box_length[0], periodic[0])
             ry = minimum_image(position[i, 1] - position[j, 1], box_length[1], periodic[1])
             rz = minimum_image(position[i, 2] - position[j, 2], box_length[2], periodic[2])
@@ -142,11 +140,11 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def gather_forces(position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
-                  owner_sum, partner_result, partner_width, partner_counts, wall_active, box_lo, box_hi, wall_history,
+                  owner_sum, partner_result, partner_start, wall_active, box_lo, box_hi, wall_history,
                   wall_mask, params,
                   contact_force_out, contact_torque_out, row_max_overlap, row_wall_contacts):
-    """Per particle: owner sum plus its partner block (``partner_counts[i]`` entries from
-    ``i * partner_width``) plus wall contacts (faces flagged in ``wall_active``:
+    """Per particle: owner sum plus its partner block (``partner_result[partner_start[i]:
+    partner_start[i+1]]``, contiguous) plus wall contacts (faces flagged in ``wall_active``:
     x-, x+, y-, y+, z-, z+). ``wall_history`` is flat ``(N * 12, 4)``: slot ``(i*6 + face)*2 + end``;
     bit ``face*2 + end`` of ``wall_mask[i]`` is set while that slot holds a contact, so particles
     away from walls cost one integer read instead of twelve history rows."""
@@ -158,9 +156,7 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
         tx = owner_sum[i, 3]
         ty = owner_sum[i, 4]
         tz = owner_sum[i, 5]
-        base = i * partner_width
-        for m in range(partner_counts[i]):
-            slot = base + m
+        for slot in range(partner_start[i], partner_start[i + 1]):
             fx += partner_result[slot, 0]
             fy += partner_result[slot, 1]
             fz += partner_result[slot, 2]

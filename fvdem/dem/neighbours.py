@@ -6,11 +6,14 @@ is below ``r_i + r_j + skin``. Because every point of a segment moves by at most
 the list stays complete until some particle's end points have moved by more than ``skin / 2``;
 the integrator tracks that bound and asks for a rebuild.
 
-Rows are fixed-width (``max_neighbours`` columns, grown when needed). Each contact's
-tangential history lives in the slot of its pair; on a rebuild the histories are carried over
-to the new slots (through the particle permutation of the cell sort), with their sign flipped
-when the pair's owner changes. Each pair also gets a slot in its partner's own block of partner
-results (``build_partner_slots``), so forces are reduced without write conflicts.
+The list is stored compactly (CSR): row i's partners are ``neighbours[row_start[i]:row_start[i+1]]``
+(int32), and a pair's slot is its position in that flat array. Compact rows matter: with padded
+fixed-width rows the per-step working set of a 32,500-particle bed overflowed the L3 cache and
+every kernel became latency bound. Each contact's tangential history lives in its pair's slot; on
+a rebuild the histories are carried over to the new slots (through the particle permutation of the
+cell sort), with their sign flipped when the pair's owner changes. Each pair also gets a slot in
+its partner's own (CSR) block of partner results (``build_partner_slots``), so forces are reduced
+without write conflicts.
 """
 from __future__ import annotations
 
@@ -79,11 +82,12 @@ def _pair_within(i, j, position, axis, radius, half_length, box_length, periodic
 
 @njit(cache=True, parallel=True)
 def build_half_list(position, axis, radius, half_length, box_lo, box_length, periodic, cell_size,
-                    n_cells, cell_of, start, skin, neighbours, counts, fill):
-    """Count (``fill=False``) or fill (``fill=True``) row i with partners j > i.
+                    n_cells, cell_of, start, skin, row_start, neighbours, counts, fill):
+    """Count (``fill=False``: ``counts[i]`` gets row i's length) or fill (``fill=True``: partners
+    j > i written from ``row_start[i]``) the half list.
 
     Scans the 27 cells around each particle's cell (wrapped on periodic axes, which need at
-    least 3 cells so no cell is visited twice). Returns nothing; ``counts`` gets row lengths.
+    least 3 cells so no cell is visited twice).
     """
     n = position.shape[0]
     nx, ny, nz = n_cells[0], n_cells[1], n_cells[2]
@@ -93,6 +97,7 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
         cy = (c // nx) % ny
         cz = c // (nx * ny)
         count = 0
+        base = row_start[i]
         for oz in range(-1, 2):
             kz = cz + oz
             if kz < 0 or kz >= nz:
@@ -117,14 +122,22 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
                             continue
                         if _pair_within(i, j, position, axis, radius, half_length, box_length, periodic, skin):
                             if fill:
-                                neighbours[i, count] = j
+                                neighbours[base + count] = j
                             count += 1
         counts[i] = count
 
 
+@njit(cache=True)
+def row_offsets(counts):
+    """CSR offsets (len n + 1) from row lengths."""
+    start = np.zeros(counts.shape[0] + 1, np.int64)
+    for i in range(counts.shape[0]):
+        start[i + 1] = start[i] + counts[i]
+    return start
+
+
 @njit(cache=True, parallel=True)
-def transfer_history(old_neighbours, old_counts, old_history, new_neighbours, new_counts, new_history,
-                     new_to_old, old_width, new_width):
+def transfer_history(old_start, old_neighbours, old_history, new_start, new_neighbours, new_history, new_to_old):
     """Carry tangential histories from the old list to the new one.
 
     ``new_to_old[k]`` is the old row of new particle k. A pair found in the old row of the
@@ -132,27 +145,23 @@ def transfer_history(old_neighbours, old_counts, old_history, new_neighbours, ne
     history is the displacement of the owner relative to the partner; the contact flag in column 3
     is copied). New pairs start at 0.
     """
-    n = new_counts.shape[0]
-    old_of_new = new_to_old
+    n = new_start.shape[0] - 1
     for i in prange(n):
-        oi = old_of_new[i]
-        for k in range(new_counts[i]):
-            oj = old_of_new[new_neighbours[i, k]]
-            slot = i * new_width + k
+        oi = new_to_old[i]
+        for slot in range(new_start[i], new_start[i + 1]):
+            oj = new_to_old[new_neighbours[slot]]
             for c in range(4):
                 new_history[slot, c] = 0.0
             found = False
-            for m in range(old_counts[oi]):
-                if old_neighbours[oi, m] == oj:
-                    src = oi * old_width + m
+            for src in range(old_start[oi], old_start[oi + 1]):
+                if old_neighbours[src] == oj:
                     for c in range(4):
                         new_history[slot, c] = old_history[src, c]
                     found = True
                     break
             if not found:
-                for m in range(old_counts[oj]):
-                    if old_neighbours[oj, m] == oi:
-                        src = oj * old_width + m
+                for src in range(old_start[oj], old_start[oj + 1]):
+                    if old_neighbours[src] == oi:
                         for c in range(3):
                             new_history[slot, c] = -old_history[src, c]
                         new_history[slot, 3] = old_history[src, 3]  # the contact flag has no sign
@@ -160,22 +169,18 @@ def transfer_history(old_neighbours, old_counts, old_history, new_neighbours, ne
 
 
 @njit(cache=True)
-def build_partner_slots(neighbours, counts, partner_counts, partner_slot):
-    """Reserve, for every listed pair (slot ``i * width + k``, partner j), an entry in j's own block
-    of the partner-result array: ``partner_slot[slot] = j * partner_width + m``. ``partner_counts[j]``
-    gets the number of pairs in which j is the partner; ``partner_width`` is their maximum.
-    Returns ``partner_width``."""
-    n = counts.shape[0]
-    width = neighbours.shape[1]
-    partner_counts[:] = 0
-    for i in range(n):
-        for k in range(counts[i]):
-            partner_counts[neighbours[i, k]] += 1
-    partner_width = max(1, partner_counts.max()) if n else 1
-    partner_counts[:] = 0
-    for i in range(n):
-        for k in range(counts[i]):
-            j = neighbours[i, k]
-            partner_slot[i * width + k] = j * partner_width + partner_counts[j]
-            partner_counts[j] += 1
-    return partner_width
+def build_partner_slots(row_start, neighbours, partner_start, partner_slot):
+    """Reserve, for every listed pair (slot ``s``, partner j), an entry in j's own block of the
+    partner-result array: ``partner_slot[s]`` in ``[partner_start[j], partner_start[j+1])``.
+    ``partner_start`` (len n + 1) gets the CSR offsets of the blocks."""
+    n = row_start.shape[0] - 1
+    partner_start[:] = 0
+    for s in range(row_start[n]):
+        partner_start[neighbours[s] + 1] += 1
+    for j in range(n):
+        partner_start[j + 1] += partner_start[j]
+    fill = partner_start[:n].copy()
+    for s in range(row_start[n]):
+        j = neighbours[s]
+        partner_slot[s] = fill[j]
+        fill[j] += 1

@@ -17,7 +17,7 @@ import numpy as np
 from .contact_law import HISTORY_COLUMNS, collision_time, contact_parameters
 from .forces import gather_forces, pair_forces
 from .integrate import kick, kick_drift
-from .neighbours import (build_half_list, build_partner_slots, cell_indices, cell_starts,
+from .neighbours import (build_half_list, build_partner_slots, cell_indices, cell_starts, row_offsets,
                          transfer_history, wrap_periodic)
 from .particles import ParticleArrays
 
@@ -104,10 +104,10 @@ class DEMSystem:
         self.reference_axis = particles.axis.copy()
         self.wall_history = np.zeros((n * 12, HISTORY_COLUMNS))
         self.wall_mask = np.zeros(n, np.int64)  # bit face*2+end: that wall slot holds a contact
-        self.neighbours = np.zeros((n, 1), np.int64)
-        self.counts = np.zeros(n, np.int64)
-        self.history = np.zeros((n, HISTORY_COLUMNS))
-        self._partner_counts = np.zeros(n, np.int64)
+        self.row_start = np.zeros(n + 1, np.int64)  # CSR half list: row i is neighbours[row_start[i]:row_start[i+1]]
+        self.neighbours = np.zeros(0, np.int32)
+        self.history = np.zeros((0, HISTORY_COLUMNS))
+        self._partner_start = np.zeros(n + 1, np.int64)
         self._owner_sum = np.zeros((n, 6))
         self._row_max_overlap = np.zeros(n)
         self._row_contacts = np.zeros(n, np.int64)
@@ -141,12 +141,12 @@ class DEMSystem:
     def compute_forces(self) -> None:
         p = self.particles
         pair_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
-                    p.half_length, p.mass, p.inertia, self.neighbours, self.counts, self.history, self._partner_slot,
+                    p.half_length, p.mass, p.inertia, self.row_start, self.neighbours, self.history, self._partner_slot,
                     self._owner_sum, self._partner_result, self._row_max_overlap, self._row_contacts, self._box_len, self._periodic, self.params,
                     not self.track_orientation)
         gather_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
                       p.half_length, p.mass, p.inertia, self._owner_sum, self._partner_result,
-                      self._partner_width, self._partner_counts, self._walls,
+                      self._partner_start, self._walls,
                       self._box_lo, self._box_hi, self.wall_history, self.wall_mask, self.params, p.contact_force,
                       p.contact_torque, self._row_max_overlap, self._row_wall_contacts)
 
@@ -171,14 +171,13 @@ class DEMSystem:
         counts = np.zeros(n, np.int64)
         args = (p.position, p.axis, p.radius, p.half_length, self._box_lo, self._box_len, self._periodic,
                 self._cell_size, self._n_cells, self._cell_of, start, self.skin)
-        build_half_list(*args, self.neighbours, counts, False)
-        width = max(1, int(counts.max()))
-        neighbours = np.zeros((n, width), np.int64)
-        build_half_list(*args, neighbours, counts, True)
-        history = np.zeros((n * width, HISTORY_COLUMNS))
-        transfer_history(self.neighbours, self.counts, self.history, neighbours, counts, history, order,
-                         self.neighbours.shape[1], width)
-        self.neighbours, self.counts, self.history = neighbours, counts, history
+        build_half_list(*args, self.row_start, self.neighbours, counts, False)
+        row_start = row_offsets(counts)
+        neighbours = np.empty(row_start[-1], np.int32)
+        build_half_list(*args, row_start, neighbours, counts, True)
+        history = np.empty((len(neighbours), HISTORY_COLUMNS))
+        transfer_history(self.row_start, self.neighbours, self.history, row_start, neighbours, history, order)
+        self.row_start, self.neighbours, self.history = row_start, neighbours, history
         self._index_partners()
         self.reference_position[:] = p.position
         self.reference_axis[:] = p.axis
@@ -186,11 +185,9 @@ class DEMSystem:
 
     def _index_partners(self) -> None:
         """Reserve partner-result slots for the current list; all partner results start at zero."""
-        n = self.particles.count
-        self._partner_slot = np.empty(n * self.neighbours.shape[1], np.int64)
-        self._partner_width = int(build_partner_slots(self.neighbours, self.counts, self._partner_counts,
-                                                      self._partner_slot))
-        self._partner_result = np.zeros((n * self._partner_width, 6))
+        self._partner_slot = np.empty(len(self.neighbours), np.int32)
+        build_partner_slots(self.row_start, self.neighbours, self._partner_start, self._partner_slot)
+        self._partner_result = np.zeros((len(self.neighbours), 6))
 
     # ------------------------------------------------------------------ diagnostics
     def diagnostics(self) -> dict:
@@ -231,7 +228,8 @@ class DEMSystem:
         """Everything needed to continue bit-for-bit (arrays and counters)."""
         data = {f"particles.{k}": v for k, v in self.particles.as_dict().items()}
         data.update({
-            "dem.wall_history": self.wall_history, "dem.wall_mask": self.wall_mask, "dem.neighbours": self.neighbours, "dem.counts": self.counts,
+            "dem.wall_history": self.wall_history, "dem.wall_mask": self.wall_mask,
+            "dem.row_start": self.row_start, "dem.neighbours": self.neighbours,
             "dem.history": self.history, "dem.reference_position": self.reference_position,
             "dem.reference_axis": self.reference_axis,
             "dem.counters": np.array([self.step_count, self.rebuild_count], np.int64),
@@ -245,7 +243,7 @@ class DEMSystem:
         self.wall_history = np.array(data["dem.wall_history"], order="C", copy=True)
         self.wall_mask = np.array(data["dem.wall_mask"], order="C", copy=True)
         self.neighbours = np.array(data["dem.neighbours"], order="C", copy=True)
-        self.counts = np.array(data["dem.counts"], order="C", copy=True)
+        self.row_start = np.array(data["dem.row_start"], order="C", copy=True)
         self.history = np.array(data["dem.history"], order="C", copy=True)
         self.reference_position = np.array(data["dem.reference_position"], order="C", copy=True)
         self.reference_axis = np.array(data["dem.reference_axis"], order="C", copy=True)
