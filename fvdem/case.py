@@ -116,7 +116,7 @@ class ContactConfig:
     tangential_stiffness_ratio: float = spec(2.0 / 7.0, gt=0.0, doc="k_t / k_n")
     tangential_damping_ratio: float = spec(1.0, ge=0.0, doc="eta_t / eta_n")
     neighbour_skin: float | None = spec(None, unit="length", gt=0.0, optional=True,
-                                        doc="neighbour-list skin [m] (default: 1/4 of the smallest diameter)")
+                                        doc="neighbour-list skin [m] (default: 1/10 of the diameter)")
 
 
 @dataclass(frozen=True)
@@ -163,7 +163,7 @@ class Case:
         return Path(self.source).parent / path
 
     def neighbour_skin(self) -> float:
-        return self.contact.neighbour_skin or 0.25 * self.particles.diameter
+        return self.contact.neighbour_skin or 0.1 * self.particles.diameter
 
     def collision_time(self) -> float:
         """Binary collision time [s] of two particles (reduced mass m/2)."""
@@ -182,7 +182,7 @@ def _describe_rule(meta) -> str:
         if meta.get(key) is not None:
             parts.append(f"{sym} {meta[key]:g}")
     if meta.get("unit"):
-        parts.append(f"in {'/'.join(UNITS[meta['unit']])} (plain numbers are SI)")
+        parts.append(f"in {', '.join(UNITS[meta['unit']])} (plain numbers are SI)")
     return " ".join(parts)
 
 

@@ -42,7 +42,7 @@ def cmd_run(args) -> int:
         return 130
     keys = ("simulated_time", "steps", "wall_seconds", "bed_height", "solids_fraction", "contacts_per_particle",
             "max_overlap_over_diameter")
-    print(json.dumps({k: summary[k] for k in keys}))
+    print(json.dumps({k: round(summary[k], 12) if isinstance(summary[k], float) else summary[k] for k in keys}))
     print(f"results in {out}/ (particles.pvd for ParaView, timeseries.csv, summary.json)")
     return 0
 

@@ -20,7 +20,7 @@ import math
 
 from numba import njit, prange
 
-from .contact_law import contact_force
+from .contact_law import ZETA_N, ZETA_WALL, contact_force
 from .geometry import minimum_image, segment_parameters
 
 # fast-math without 'nnan'/'ninf': FMA contraction, reciprocals, reassociation; NaN and Inf still
@@ -108,7 +108,7 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             inertia_eff = ii * ij / (ii + ij)
             fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
                 history, slot, overlap, nx, ny, nz, vx, vy, vz,
-                wi0 - wj0, wi1 - wj1, wi2 - wj2, reduced_mass, r_eff, inertia_eff, params)
+                wi0 - wj0, wi1 - wj1, wi2 - wj2, reduced_mass, r_eff, inertia_eff, params[ZETA_N], params)
             ti = _cross(lix, liy, liz, fx, fy, fz)
             tj = _cross(ljx, ljy, ljz, -fx, -fy, -fz)
             sfx += fx
@@ -215,7 +215,7 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
                 wfx, wfy, wfz, trx, tr_y, trz, f_n = contact_force(
                     wall_history, slot, overlap, nx, ny, nz, vx, vy, vz,
                     angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2],
-                    mass[i], r, imin, params)
+                    mass[i], r, imin, params[ZETA_WALL], params)
                 fx += wfx
                 fy += wfy
                 fz += wfz

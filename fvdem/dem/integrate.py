@@ -39,35 +39,26 @@ def _kick(i, velocity, angular_momentum, mass, contact_force, contact_torque, ex
 @njit(cache=True, parallel=True)
 def kick_drift(position, velocity, angular_momentum, angular_velocity, quaternion, axis, half_length,
                mass, inertia, contact_force, contact_torque, external_force, external_torque, gravity, dt,
-               reference_position, reference_axis, displacement, track_orientation,
-               predicted_velocity, predicted_angular_velocity):
+               reference_position, reference_axis, displacement, track_orientation):
     """Half kick, full drift; writes each particle's end-point displacement bound since the last
-    neighbour-list build into ``displacement`` [m].
+    neighbour-list build into ``displacement`` [m]. The contact law then sees the half-kicked
+    velocities (the dashpot lags by dt/2: see ``contact_law`` for how the damping is calibrated).
 
-    Also writes the velocities predicted at the end of the step with the previous forces,
-    ``v + dt/2 a_old`` (and likewise for rotation), which the contact law uses for damping and
-    tangential sliding. Evaluating the dashpot at the half-step velocity instead (as LIGGGHTS does)
-    lags it by dt/2 and biases the restitution by O(dt/t_c): -7 % at dt = t_c/17 for e = 0.43;
-    the prediction makes the error second order.
+    Extrapolating the velocities to the end of the step for the dashpot was tried and rejected: it
+    makes binary restitution second order in dt but is anti-dissipative for the stiff modes of
+    multi-contact packs (a pile of 60 rods kept 1e-8 J of jitter instead of decaying to 1e-11 J).
     """
     n = position.shape[0]
     half_dt = 0.5 * dt
     for i in prange(n):
         _kick(i, velocity, angular_momentum, mass, contact_force, contact_torque, external_force,
               external_torque, gravity, half_dt)
-        inv_m = half_dt / mass[i]
-        for c in range(3):
-            predicted_velocity[i, c] = (velocity[i, c] + (contact_force[i, c] + external_force[i, c]) * inv_m
-                                        + gravity[c] * half_dt)
         position[i, 0] += velocity[i, 0] * dt
         position[i, 1] += velocity[i, 1] * dt
         position[i, 2] += velocity[i, 2] * dt
         i_t = inertia[i, 0]
         i_a = inertia[i, 1]
         lx, ly, lz = angular_momentum[i, 0], angular_momentum[i, 1], angular_momentum[i, 2]
-        px = lx + (contact_torque[i, 0] + external_torque[i, 0]) * half_dt
-        py = ly + (contact_torque[i, 1] + external_torque[i, 1]) * half_dt
-        pz = lz + (contact_torque[i, 2] + external_torque[i, 2]) * half_dt
         dx = position[i, 0] - reference_position[i, 0]
         dy = position[i, 1] - reference_position[i, 1]
         dz = position[i, 2] - reference_position[i, 2]
@@ -96,10 +87,6 @@ def kick_drift(position, velocity, angular_momentum, angular_velocity, quaternio
             axis[i, 2] = 1.0 - 2.0 * (qx * qx + qy * qy)
             w = _omega(lx, ly, lz, axis[i, 0], axis[i, 1], axis[i, 2], i_t, i_a)
             angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2] = w
-            w = _omega(px, py, pz, axis[i, 0], axis[i, 1], axis[i, 2], i_t, i_a)
-            predicted_angular_velocity[i, 0] = w[0]
-            predicted_angular_velocity[i, 1] = w[1]
-            predicted_angular_velocity[i, 2] = w[2]
             ex = axis[i, 0] - reference_axis[i, 0]
             ey = axis[i, 1] - reference_axis[i, 1]
             ez = axis[i, 2] - reference_axis[i, 2]
@@ -108,9 +95,6 @@ def kick_drift(position, velocity, angular_momentum, angular_velocity, quaternio
             angular_velocity[i, 0] = lx / i_t
             angular_velocity[i, 1] = ly / i_t
             angular_velocity[i, 2] = lz / i_t
-            predicted_angular_velocity[i, 0] = px / i_t
-            predicted_angular_velocity[i, 1] = py / i_t
-            predicted_angular_velocity[i, 2] = pz / i_t
         displacement[i] = moved
 
 

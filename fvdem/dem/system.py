@@ -55,10 +55,11 @@ class ContactModel:
     tangential_stiffness_ratio: float = 2.0 / 7.0
     tangential_damping_ratio: float = 1.0
 
-    def parameters(self, dt: float) -> np.ndarray:
+    def parameters(self, dt: float, mass: float) -> np.ndarray:
+        """Kernel parameter vector; the damping is calibrated for particles of ``mass`` [kg] at ``dt``."""
         return contact_parameters(self.normal_stiffness, self.tangential_stiffness_ratio * self.normal_stiffness,
                                   self.restitution, self.tangential_damping_ratio, self.friction,
-                                  self.rolling_friction, dt)
+                                  self.rolling_friction, dt, mass)
 
     def collision_time(self, mass: float) -> float:
         """Binary collision time [s] of two particles of ``mass`` [kg] (reduced mass m/2)."""
@@ -76,8 +77,8 @@ class DEMSystem:
         self.dt = float(dt)
         self.gravity = np.asarray(gravity, dtype=np.float64)
         diam = 2.0 * float(particles.radius.min())
-        self.skin = float(skin) if skin is not None else 0.25 * diam
-        self.params = contact.parameters(self.dt)
+        self.skin = float(skin) if skin is not None else 0.1 * diam
+        self.params = contact.parameters(self.dt, float(np.median(particles.mass)))
         self.track_orientation = bool(np.any(particles.half_length > 0.0))
         self.step_count = 0
         self.rebuild_count = 0
@@ -97,9 +98,6 @@ class DEMSystem:
         self._cell_size = self._box_len / self._n_cells
         self._cell_of = np.empty(n, np.int64)
         self.displacement = np.zeros(n)
-        # contact velocities: predicted at the end of the step (see integrate.kick_drift)
-        self._predicted_velocity = particles.velocity.copy()
-        self._predicted_angular_velocity = particles.angular_velocity.copy()
         self.reference_position = particles.position.copy()
         self.reference_axis = particles.axis.copy()
         self.wall_history = np.zeros((n * 12, HISTORY_COLUMNS))
@@ -128,8 +126,7 @@ class DEMSystem:
             kick_drift(p.position, p.velocity, p.angular_momentum, p.angular_velocity, p.quaternion, p.axis,
                        p.half_length, p.mass, p.inertia, p.contact_force, p.contact_torque, p.external_force,
                        p.external_torque, self.gravity, self.dt, self.reference_position, self.reference_axis,
-                       self.displacement, self.track_orientation, self._predicted_velocity,
-                       self._predicted_angular_velocity)
+                       self.displacement, self.track_orientation)
             if self.displacement.max() > 0.5 * self.skin:
                 self.rebuild()
             self.compute_forces()
@@ -140,11 +137,11 @@ class DEMSystem:
 
     def compute_forces(self) -> None:
         p = self.particles
-        pair_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
+        pair_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
                     p.half_length, p.mass, p.inertia, self.row_start, self.neighbours, self.history, self._partner_slot,
                     self._owner_sum, self._partner_result, self._row_max_overlap, self._row_contacts, self._box_len, self._periodic, self.params,
                     not self.track_orientation)
-        gather_forces(p.position, self._predicted_velocity, self._predicted_angular_velocity, p.axis, p.radius,
+        gather_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
                       p.half_length, p.mass, p.inertia, self._owner_sum, self._partner_result,
                       self._partner_start, self._walls,
                       self._box_lo, self._box_hi, self.wall_history, self.wall_mask, self.params, p.contact_force,
@@ -164,8 +161,6 @@ class DEMSystem:
             self.wall_history = np.ascontiguousarray(self.wall_history.reshape(n, 12, HISTORY_COLUMNS)[order].reshape(n * 12, HISTORY_COLUMNS))
             self._cell_of = self._cell_of[order]
             self.wall_mask = np.ascontiguousarray(self.wall_mask[order])
-            self._predicted_velocity = np.ascontiguousarray(self._predicted_velocity[order])
-            self._predicted_angular_velocity = np.ascontiguousarray(self._predicted_angular_velocity[order])
         total_cells = int(np.prod(self._n_cells))
         start = cell_starts(self._cell_of, total_cells)
         counts = np.zeros(n, np.int64)
