@@ -249,3 +249,31 @@ def test_sphere_on_spherocylinder_collision(where):
     assert np.allclose((m[:, None] * v).sum(axis=0), p0, atol=1e-15)
     assert ((v[1] - v[0]) @ approach) / 0.4 == pytest.approx(0.6, rel=0.01)
     assert np.abs(by_id(s, "angular_velocity")).max() < 1e-6  # both impacts are central
+
+
+@pytest.mark.parametrize("tangential_speed", [0.02, 0.1])
+def test_oblique_pair_impact_restitution_and_coulomb_limit(tangential_speed):
+    """Two spheres meeting with a tangential relative velocity: normal restitution as set,
+    tangential impulse <= mu x normal impulse, momentum and angular momentum conserved. (At large
+    sliding speeds the pair moves sideways during the contact and the normal rotates, so a fixed
+    axis is no longer the normal: gross sliding is tested against a wall, whose normal is fixed.)"""
+    mu, vn = 0.3, 0.4
+    contact = ContactModel(friction=mu, rolling_friction=0.0)
+    normal = np.array([1.0, 0.0, 0.0])
+    s = make_system([[0.05, 0.05, 0.05], [0.05 + SPHERE_D * 1.01, 0.05, 0.05]], R,
+                    velocity=[[vn / 2, tangential_speed / 2, 0], [-vn / 2, -tangential_speed / 2, 0]],
+                    contact=contact, steps_per_collision=50)
+    m = s.particles.mass[0]
+
+    def angular_momentum():
+        p = s.particles
+        return (np.cross(p.position, p.mass[:, None] * p.velocity) + p.angular_momentum).sum(axis=0)
+    initial = angular_momentum()
+    run_until_separated(s)
+    v = by_id(s, "velocity")
+    assert (v[1] - v[0]) @ normal / vn == pytest.approx(0.43, rel=0.01)
+    impulse_n = m * abs(v[0] @ normal - vn / 2)
+    impulse_t = m * abs(v[0, 1] - tangential_speed / 2)
+    assert impulse_t <= mu * impulse_n * (1 + 1e-9)
+    np.testing.assert_allclose(v.sum(axis=0), 0.0, atol=1e-14)
+    assert np.abs(angular_momentum() - initial).max() <= 1e-12 * np.abs(initial).max()

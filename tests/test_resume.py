@@ -95,3 +95,39 @@ def test_parallel_run_exits_cleanly(tmp_path):
                              "--threads", "2"], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert time.time() - start < 120
+
+
+def test_non_finite_state_is_reported_with_the_cause(tmp_path):
+    path = tmp_path / "case.toml"
+    path.write_text(CASE)
+    sim = fvdem.Simulation(fvdem.load_case(path))
+    sim.particles.velocity[3, 0] = np.nan
+    try:
+        sim.run(0.002)
+    except fvdem.SimulationError as exc:
+        message = str(exc)
+    else:
+        raise AssertionError("a NaN velocity went unnoticed")
+    assert "non-finite" in message and "collision time" in message and "DEM time step" in message
+
+
+def test_cli_exits_3_when_the_run_becomes_unstable(tmp_path):
+    # soft walls + a huge initial speed: particles punch through the floor
+    text = CASE.replace("[time]", "[contact]\nnormal_stiffness = 1.0\n[time]").replace(
+        'count = 150', 'count = 150\ninitial_state = "state.npz"')
+    fvdem.Simulation(fvdem.load_case(_write(tmp_path, CASE)), tmp_path / "seed").run(0.001)
+    with np.load(tmp_path / "seed" / "final_state.npz") as data:
+        state = {k: data[k] for k in data.files}
+    state["velocity"][:, 2] = -50.0
+    np.savez(tmp_path / "state.npz", **state)
+    result = subprocess.run([sys.executable, "-m", "fvdem.cli", "run", str(_write(tmp_path, text, "soft.toml")),
+                             "--out", str(tmp_path / "out"), "--set", "time.dem_step=1e-4"],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 3, result.stderr
+    assert "left the domain through a wall" in result.stderr and "Traceback" not in result.stderr
+
+
+def _write(tmp_path, text, name="case.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
