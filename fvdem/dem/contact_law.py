@@ -77,21 +77,27 @@ def restitution_of_damping(zeta: float) -> float:
     return _collision_in_units_of_w0(zeta)[1]
 
 
+def _solve_decreasing(function, target: float, upper: float, iterations: int) -> float:
+    """Root of ``function(x) = target`` on x >= 0 for a decreasing ``function`` (bisection; the
+    bracket ``[0, upper]`` is doubled until it holds the root)."""
+    lo, hi = 0.0, upper
+    while function(hi) > target:
+        hi *= 2.0
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        if function(mid) > target:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
 def damping_ratio(restitution: float) -> float:
     """Damping ratio ``zeta`` of the clipped linear spring-dashpot that gives restitution
     ``e`` in (0, 1] (bisection on the exact, monotone ``restitution_of_damping``)."""
     if restitution >= 1.0:
         return 0.0
-    lo, hi = 0.0, 1.0
-    while restitution_of_damping(hi) > restitution:
-        hi *= 2.0
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if restitution_of_damping(mid) > restitution:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+    return _solve_decreasing(restitution_of_damping, restitution, 1.0, 200)
 
 
 def collision_time(normal_stiffness: float, reduced_mass: float, restitution: float) -> float:
@@ -136,16 +142,7 @@ def calibrated_damping_ratio(restitution: float, step: float, phases: int = 8) -
     def mean_e(zeta):
         return sum(discrete_restitution(zeta, step, ph) for ph in grid) / phases
 
-    lo, hi = 0.0, 2.0 * damping_ratio(restitution) + 0.5
-    while mean_e(hi) > restitution:
-        hi *= 2.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if mean_e(mid) > restitution:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+    return _solve_decreasing(mean_e, restitution, 2.0 * damping_ratio(restitution) + 0.5, 60)
 
 
 def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tangential_damping_factor,
