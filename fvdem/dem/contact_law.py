@@ -233,18 +233,19 @@ def rolling_torque(nx, ny, nz, wx, wy, wz, f_n, mu_r, r_eff, inertia_eff, dt):
 
 @njit(cache=True, inline="always")
 def contact_force(history, row, delta, nx, ny, nz, vx, vy, vz, wx, wy, wz,
-                  reduced_mass, r_eff, inertia_eff, zeta, params):
+                  eta_n, r_eff, inertia_eff, params):
     """Total contact force on the particle [N] and its rolling torque [N m].
 
     ``history[row]`` holds the tangential displacement [m] and the contact flag (see module doc).
-    ``delta`` overlap [m]; ``n`` unit normal from partner to particle; ``v`` relative velocity of
+    ``delta`` overlap [m]; ``eta_n`` the dashpot coefficient [kg/s] (``normal_damping``);
+    ``r_eff`` reduced radius [m]; ``inertia_eff`` reduced rolling inertia [kg m^2];
+    ``n`` unit normal from partner to particle; ``v`` relative velocity of
     the particle's contact point [m/s]; ``w`` relative angular velocity [rad/s]. Returns
     ``(fx, fy, fz, tx, ty, tz, f_n)`` with ``f_n >= 0`` the normal force magnitude.
     """
     k_n = params[K_N]
     dt = params[DT]
     v_n = vx * nx + vy * ny + vz * nz
-    eta_n = normal_damping(zeta, reduced_mass, k_n)
     onset = 1.0
     if history[row, 3] == 0.0:  # first step of this contact
         history[row, 3] = 1.0

@@ -20,7 +20,7 @@ import math
 
 from numba import njit, prange
 
-from .contact_law import ZETA_N, ZETA_WALL, contact_force
+from .contact_law import K_N, ZETA_N, ZETA_WALL, contact_force, normal_damping
 from .geometry import minimum_image, segment_parameters
 
 # fast-math without 'nnan'/'ninf': FMA contraction, reciprocals, reassociation; NaN and Inf still
@@ -36,14 +36,15 @@ def _cross(ax, ay, az, bx, by, bz):
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
                 row_start, neighbours, history, partner_slot, owner_sum, partner_result, row_max_overlap,
-                row_contacts, box_length, periodic, params, spheres_only):
+                row_contacts, box_length, periodic, params, spheres_only, uniform):
     """Contact force and torques of every listed pair.
 
     Row i's pairs are the slots ``row_start[i] .. row_start[i+1]`` of the CSR list ``neighbours``;
     ``history`` (4 columns, see ``contact_law``) is indexed by slot; ``owner_sum`` (N, 6) gets each row's ``[force, torque]`` sum;
     ``partner_result[partner_slot[slot]]`` gets ``[-force, torque on partner]``. Partner entries of
     non-touching pairs hold zeros: cleared once when a contact ends (a list rebuild starts from
-    zeros), so steady non-contacts cost no writes. ``row_max_overlap[i]`` gets the largest overlap/diameter of row i and
+    zeros), so steady non-contacts cost no writes. ``uniform = (eta_n, r_eff, inertia_eff)`` when all
+    particles are identical (pair constants precomputed), else ``uniform[0] < 0``. ``row_max_overlap[i]`` gets the largest overlap/diameter of row i and
     ``row_contacts[i]`` the number of touching pairs in row i.
     """
     n = position.shape[0]
@@ -101,14 +102,17 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             vx = velocity[i, 0] + ci[0] - velocity[j, 0] - cj[0]
             vy = velocity[i, 1] + ci[1] - velocity[j, 1] - cj[1]
             vz = velocity[i, 2] + ci[2] - velocity[j, 2] - cj[2]
-            reduced_mass = mass[i] * mass[j] / (mass[i] + mass[j])
-            r_eff = radius[i] * radius[j] / radius_sum
-            ii = min(inertia[i, 0], inertia[i, 1])
-            ij = min(inertia[j, 0], inertia[j, 1])
-            inertia_eff = ii * ij / (ii + ij)
+            if uniform[0] >= 0.0:
+                eta_n, r_eff, inertia_eff = uniform[0], uniform[1], uniform[2]
+            else:
+                eta_n = normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), params[K_N])
+                r_eff = radius[i] * radius[j] / radius_sum
+                ii = min(inertia[i, 0], inertia[i, 1])
+                ij = min(inertia[j, 0], inertia[j, 1])
+                inertia_eff = ii * ij / (ii + ij)
             fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
                 history, slot, overlap, nx, ny, nz, vx, vy, vz,
-                wi0 - wj0, wi1 - wj1, wi2 - wj2, reduced_mass, r_eff, inertia_eff, params[ZETA_N], params)
+                wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, params)
             ti = _cross(lix, liy, liz, fx, fy, fz)
             tj = _cross(ljx, ljy, ljz, -fx, -fy, -fz)
             sfx += fx
@@ -215,7 +219,7 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
                 wfx, wfy, wfz, trx, tr_y, trz, f_n = contact_force(
                     wall_history, slot, overlap, nx, ny, nz, vx, vy, vz,
                     angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2],
-                    mass[i], r, imin, params[ZETA_WALL], params)
+                    normal_damping(params[ZETA_WALL], mass[i], params[K_N]), r, imin, params)
                 fx += wfx
                 fy += wfy
                 fz += wfz

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contact_law import HISTORY_COLUMNS, collision_time, contact_parameters
+from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
 from .forces import gather_forces, pair_forces
 from .integrate import kick, kick_drift
 from .neighbours import (build_half_list, build_partner_slots, cell_indices, cell_starts, row_offsets,
@@ -80,6 +80,7 @@ class DEMSystem:
         self.skin = float(skin) if skin is not None else 0.1 * diam
         self.params = contact.parameters(self.dt, float(np.median(particles.mass)))
         self.track_orientation = bool(np.any(particles.half_length > 0.0))
+        self._uniform = self._pair_constants(particles)
         self.step_count = 0
         self.rebuild_count = 0
         n = particles.count
@@ -113,6 +114,18 @@ class DEMSystem:
         self.rebuild()
         self.compute_forces()
 
+    def _pair_constants(self, particles) -> np.ndarray:
+        """``(eta_n, r_eff, inertia_eff)`` of a pair when all particles are identical (saves three
+        divisions and a square root per contact), else ``(-1, -1, -1)``."""
+        same = all(np.ptp(a) == 0.0 for a in (particles.mass, particles.radius, particles.inertia[:, 0],
+                                               particles.inertia[:, 1])) and particles.count > 0
+        if not same:
+            return np.full(3, -1.0)
+        m, r = float(particles.mass[0]), float(particles.radius[0])
+        i_min = float(particles.inertia[0].min())
+        eta = normal_damping(self.params[ZETA_N], 0.5 * m, self.params[K_N])
+        return np.array([eta, 0.5 * r, 0.5 * i_min])
+
     # ------------------------------------------------------------------ stepping
     @property
     def time(self) -> float:
@@ -140,7 +153,7 @@ class DEMSystem:
         pair_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
                     p.half_length, p.mass, p.inertia, self.row_start, self.neighbours, self.history, self._partner_slot,
                     self._owner_sum, self._partner_result, self._row_max_overlap, self._row_contacts, self._box_len, self._periodic, self.params,
-                    not self.track_orientation)
+                    not self.track_orientation, self._uniform)
         gather_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
                       p.half_length, p.mass, p.inertia, self._owner_sum, self._partner_result,
                       self._partner_start, self._walls,
