@@ -66,3 +66,57 @@ def diagonal(mesh: GasMesh, coeff_cell) -> sp.dia_matrix:
     """``diag(coeff V)``: FiPy's ``ImplicitSourceTerm(coeff)`` (and ``TransientTerm`` with coeff/dt)."""
     values = np.broadcast_to(coeff_cell, mesh.cell_volumes.shape) * mesh.cell_volumes
     return sp.diags(values, format="csr")
+
+
+class UpwindConvectionOperator:
+    """First-order upwind convection ``div(F phi)`` from face volume fluxes ``F = (u . n) A`` [m^3/s]
+    (n from a face's first cell to its second; outward on the boundary).
+
+    Interior faces carry ``F phi_upwind`` out of the first cell into the second. Boundary faces are
+    closed unless listed: ``inflow_faces`` bring ``F phi_b`` in (Dirichlet value on the right-hand
+    side), ``outflow_faces`` carry ``F phi_P`` out (the top of a column; FiPy's convection term leaves
+    unconstrained boundary faces closed, so an outflow must be added explicitly).
+    """
+
+    def __init__(self, mesh: GasMesh, inflow_faces=(), outflow_faces=()):
+        self.mesh = mesh
+        n = mesh.cell_count
+        interior = np.nonzero(mesh.interior)[0]
+        p, q = mesh.face_cells[interior, 0], mesh.face_cells[interior, 1]
+        self.inflow_faces = np.asarray(sorted(set(int(f) for f in inflow_faces)), dtype=np.int64)
+        self.outflow_faces = np.asarray(sorted(set(int(f) for f in outflow_faces)), dtype=np.int64)
+        po = mesh.face_cells[self.outflow_faces, 0]
+        # entries: (P,P,+F+), (P,N,+F-), (N,N,-F-), (N,P,-F+), outflow (P,P,+F)
+        rows = np.concatenate([p, p, q, q, po])
+        cols = np.concatenate([p, q, q, p, po])
+        pattern = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+        pattern.sum_duplicates()
+        pattern.sort_indices()
+        self._indptr, self._indices = pattern.indptr, pattern.indices
+        lookup = sp.csr_matrix((np.arange(1, pattern.nnz + 1), pattern.indices, pattern.indptr), shape=(n, n))
+        position = np.asarray(lookup[rows, cols]).ravel() - 1
+        m = len(interior)
+        k = len(self.outflow_faces)
+        f_all = mesh.face_count
+        self._scatter_plus = sp.csr_matrix(
+            (np.concatenate([np.ones(m), -np.ones(m), np.ones(k)]),
+             (np.concatenate([position[:m], position[3 * m:4 * m], position[4 * m:]]),
+              np.concatenate([interior, interior, self.outflow_faces]))), shape=(pattern.nnz, f_all))
+        self._scatter_minus = sp.csr_matrix(
+            (np.concatenate([np.ones(m), -np.ones(m), np.ones(k)]),
+             (np.concatenate([position[m:2 * m], position[2 * m:3 * m], position[4 * m:]]),
+              np.concatenate([interior, interior, self.outflow_faces]))), shape=(pattern.nnz, f_all))
+        pi = mesh.face_cells[self.inflow_faces, 0]
+        self._rhs_scatter = sp.csr_matrix((-np.ones(len(pi)), (pi, self.inflow_faces)), shape=(n, f_all))
+
+    def matrix(self, face_flux) -> sp.csr_matrix:
+        """The operator for face volume fluxes ``face_flux`` (F,) [m^3/s] (or mass fluxes)."""
+        plus = np.maximum(face_flux, 0.0)
+        minus = np.minimum(face_flux, 0.0)
+        data = self._scatter_plus @ plus + self._scatter_minus @ minus
+        n = self.mesh.cell_count
+        return sp.csr_matrix((data, self._indices, self._indptr), shape=(n, n))
+
+    def rhs(self, face_flux, boundary_value_face) -> np.ndarray:
+        """Right-hand side of the inflow faces: ``-F phi_b`` (F < 0 flows in)."""
+        return self._rhs_scatter @ (face_flux * boundary_value_face)
