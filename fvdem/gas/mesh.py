@@ -58,6 +58,15 @@ class GasMesh:
         """Mask of faces between two cells (periodic faces included)."""
         return self.face_cells[:, 1] >= 0
 
+    @property
+    def unused(self) -> np.ndarray:
+        """Mask of faces that are neither interior nor a boundary: the single-cell copies that FiPy
+        keeps of periodic faces. They carry no flux and take no part in gradients."""
+        mask = ~self.interior
+        for faces in self.boundary_faces.values():
+            mask[faces] = False
+        return mask
+
     @classmethod
     def box(cls, shape, lower, upper, periodic=(False, False, False)) -> "GasMesh":
         """A structured grid of ``shape = (nx, ny, nz)`` cells on the box ``lower``-``upper`` [m];

@@ -1,0 +1,196 @@
+"""Volume-averaged gas flow ("model A", MODEL.md §2) with a collocated SIMPLE pressure-velocity coupling.
+
+Equations (gas density rho constant, interstitial velocity u, voidage eps):
+
+    d(eps)/dt + div(eps u) = 0
+    rho d(eps u)/dt + div(rho eps u u) = -eps grad p + div(mu eps grad u) - beta u + S + rho eps g
+
+``beta`` [kg/(m^3 s)] is the implicit interphase coefficient and ``S`` [N/m^3] the explicit source per
+cell that the coupling bridge fills (the Eq. 8 sink written semi-implicitly as ``beta (v_p - u)``
+gives ``S = beta v_p``). Discretization: FiPy's finite volumes (``operators``), first-order upwind
+convection of momentum, implicit Euler in time.
+
+Coupling (SIMPLE with Rhie-Chow momentum interpolation): with ``a_P`` the momentum diagonal and
+``D = eps V / a_P``, cell velocities obey ``u = u_hat - D grad p``; the face volume flux of gas is
+``phi_f = eps_f A_f [ (u_hat . n)_f - D_f (p_N - p_P) / d_f ]``, which couples pressure on adjacent
+cells (no checkerboard). The pressure correction ``p'`` solves
+``div(eps D grad p') = sum_f phi*_f + (eps - eps_old) V / dt`` so that the corrected fluxes satisfy
+the continuity equation including the voidage change; outer iterations repeat momentum and
+correction until both the continuity residual (relative to the largest face flux) and the relative
+velocity change of an iteration are below ``tolerance``.
+
+Boundaries of a walled column: walls (no-slip or free-slip), a uniform inlet of superficial velocity
+``U`` on ``z-`` (distributor), a fixed pressure outlet ``p = 0`` on ``z+``. A fully periodic box
+has none; its pressure is fixed to zero mean (a body force drives the flow, through ``S``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .mesh import GasMesh
+from .operators import DiffusionOperator, UpwindConvectionOperator, diagonal
+
+
+@dataclass(frozen=True)
+class GasProperties:
+    density: float = 1.2          # kg/m^3
+    viscosity: float = 1.568e-5   # Pa s
+
+
+class GasSolver:
+    """Gas velocity, pressure and face fluxes on a ``GasMesh`` (state as numpy arrays).
+
+    ``velocity`` (C, 3) [m/s] interstitial; ``pressure`` (C,) [Pa] (relative to the outlet);
+    ``face_flux`` (F,) [m^3/s] gas volume flux ``eps u . n A``; ``voidage`` (C,) and
+    ``voidage_old`` (C,); ``beta`` (C,) [kg/(m^3 s)]; ``source`` (C, 3) [N/m^3].
+    """
+
+    def __init__(self, mesh: GasMesh, gas: GasProperties = GasProperties(), gravity=(0.0, 0.0, -9.81),
+                 inlet_velocity: float = 0.0, walls: str = "no-slip", relax_velocity: float = 0.7,
+                 relax_pressure: float = 0.3, tolerance: float = 1e-8, max_iterations: int = 200):
+        self.mesh = mesh
+        self.gas = gas
+        self.gravity = np.asarray(gravity, float)
+        self.inlet_velocity = float(inlet_velocity)
+        self.relax_velocity = relax_velocity
+        self.relax_pressure = relax_pressure
+        self.tolerance = tolerance
+        self.max_iterations = max_iterations
+        n, f = mesh.cell_count, mesh.face_count
+        self.periodic = all(mesh.periodic)
+        self.velocity = np.zeros((n, 3))
+        self.pressure = np.zeros(n)
+        self.face_flux = np.zeros(f)
+        self.voidage = np.ones(n)
+        self.voidage_old = np.ones(n)
+        self.beta = np.zeros(n)
+        self.source = np.zeros((n, 3))
+        self.iterations = 0
+        b = mesh.boundary_faces
+        self._inlet = b["z-"]
+        self._outlet = b["z+"]
+        wall_sides = {"x-": 0, "x+": 0, "y-": 1, "y+": 1}
+        self._walls = np.concatenate([b[s] for s in wall_sides]) if not self.periodic else np.zeros(0, int)
+        # Dirichlet velocity faces per component: inlet always; walls: all components (no-slip) or the
+        # normal component only (free-slip)
+        self._velocity_dirichlet = []
+        for c in range(3):
+            faces = [self._inlet]
+            for side, axis in wall_sides.items():
+                if walls == "no-slip" or axis == c:
+                    faces.append(b[side])
+            self._velocity_dirichlet.append(np.concatenate(faces) if not self.periodic else np.zeros(0, int))
+        self._viscous = [DiffusionOperator(mesh, faces) for faces in self._velocity_dirichlet]
+        self._convection = UpwindConvectionOperator(mesh, inflow_faces=self._inlet, outflow_faces=self._outlet)
+        self._pressure_laplacian = DiffusionOperator(mesh, self._outlet)
+        self._interior = np.nonzero(mesh.interior)[0]
+        self._p = mesh.face_cells[self._interior, 0]
+        self._q = mesh.face_cells[self._interior, 1]
+        self._boundary_cell = mesh.face_cells[:, 0]
+        self._area_normal = mesh.face_areas[:, None] * mesh.face_normals
+        self._closed = np.concatenate([self._walls, np.nonzero(mesh.unused)[0]])  # faces with no flux
+        self._area_normal[mesh.unused] = 0.0
+        # inlet boundary values (velocity): U / eps at the inlet face, set in step()
+        self._inlet_flux = -self.inlet_velocity * mesh.face_areas[self._inlet]
+        self.face_flux[self._inlet] = self._inlet_flux
+
+    # ------------------------------------------------------------------ helpers
+    def _face_average(self, cell_values):
+        """Arithmetic face average (uniform grid: linear interpolation); boundary faces take the cell value."""
+        out = cell_values[self._boundary_cell].copy()
+        out[self._interior] = 0.5 * (cell_values[self._p] + cell_values[self._q])
+        return out
+
+    def _pressure_gradient(self, pressure):
+        """Gauss gradient (C, 3) [Pa/m]; outlet faces at p = 0, walls and inlet zero-gradient."""
+        face_p = self._face_average(pressure)
+        face_p[self._outlet] = 0.0
+        flux = face_p[:, None] * self._area_normal
+        grad = np.zeros((self.mesh.cell_count, 3))
+        np.add.at(grad, self.mesh.face_cells[:, 0], flux)
+        np.add.at(grad, self._q, -flux[self._interior])
+        return grad / self.mesh.cell_volumes[:, None]
+
+    def _net_outflow(self, face_flux):
+        out = np.zeros(self.mesh.cell_count)
+        np.add.at(out, self.mesh.face_cells[:, 0], face_flux)
+        np.add.at(out, self._q, -face_flux[self._interior])
+        return out
+
+    # ------------------------------------------------------------------ one time step
+    def step(self, dt: float) -> dict:
+        """Advance the gas by ``dt`` [s] with ``voidage``, ``voidage_old``, ``beta`` and ``source`` as
+        set by the caller. Returns convergence information."""
+        mesh = self.mesh
+        rho, mu = self.gas.density, self.gas.viscosity
+        eps, eps_old = self.voidage, self.voidage_old
+        vol = mesh.cell_volumes
+        u_old = self.velocity.copy()
+        eps_face = self._face_average(eps)
+        gamma = mu * eps_face
+        inlet_value = np.zeros((mesh.face_count, 3))
+        inlet_value[self._inlet, 2] = self.inlet_velocity / eps[self._boundary_cell[self._inlet]]
+        self.face_flux[self._inlet] = self._inlet_flux
+        residual = np.inf
+        for iteration in range(1, self.max_iterations + 1):
+            transient = rho * eps / dt
+            convection = self._convection.matrix(rho * self.face_flux)
+            base = diagonal(mesh, transient + self.beta) + convection
+            matrices, rhs = [], []
+            for c in range(3):
+                a = (base - self._viscous[c].matrix(gamma)).tocsr()
+                b = (rho * eps_old / dt * u_old[:, c] + self.source[:, c] + rho * eps * self.gravity[c]) * vol
+                b = b + self._convection.rhs(rho * self.face_flux, inlet_value[:, c])
+                b = b - self._viscous[c].rhs(gamma, inlet_value[:, c])
+                matrices.append(a)
+                rhs.append(b)
+            a_p = np.mean([m.diagonal() for m in matrices], axis=0) / self.relax_velocity
+            grad_p = self._pressure_gradient(self.pressure)
+            previous = self.velocity.copy()
+            for c in range(3):
+                a = matrices[c]
+                diag_c = a.diagonal()
+                relaxed = a + sp.diags(diag_c / self.relax_velocity - diag_c)
+                b = rhs[c] - eps * vol * grad_p[:, c] + (diag_c / self.relax_velocity - diag_c) * self.velocity[:, c]
+                self.velocity[:, c] = spla.spsolve(relaxed.tocsc(), b)
+            # Rhie-Chow face fluxes from the momentum prediction
+            d_cell = eps * vol / a_p
+            u_hat = self.velocity + d_cell[:, None] * grad_p
+            d_face = self._face_average(d_cell)
+            u_hat_n = np.einsum("fi,fi->f", self._face_average(u_hat), mesh.face_normals)
+            dp = np.zeros(mesh.face_count)
+            dp[self._interior] = (self.pressure[self._q] - self.pressure[self._p]) / mesh.face_distances[self._interior]
+            dp[self._outlet] = (0.0 - self.pressure[self._boundary_cell[self._outlet]]) / mesh.face_distances[self._outlet]
+            flux = eps_face * mesh.face_areas * (u_hat_n - d_face * dp)
+            flux[self._closed] = 0.0
+            flux[self._inlet] = self._inlet_flux
+            # pressure correction: div(eps D grad p') = net outflow + d(eps)/dt V
+            imbalance = self._net_outflow(flux) + (eps - eps_old) * vol / dt
+            laplacian = self._pressure_laplacian.matrix(eps_face * d_face).tocsc()
+            if self.periodic:  # pressure fixed up to a constant: pin cell 0
+                p_corr = np.zeros(mesh.cell_count)
+                p_corr[1:] = spla.spsolve(laplacian[1:, 1:], imbalance[1:])
+            else:
+                p_corr = spla.spsolve(laplacian, imbalance)
+            dpc = np.zeros(mesh.face_count)
+            dpc[self._interior] = (p_corr[self._q] - p_corr[self._p]) / mesh.face_distances[self._interior]
+            dpc[self._outlet] = -p_corr[self._boundary_cell[self._outlet]] / mesh.face_distances[self._outlet]
+            flux_corr = -eps_face * mesh.face_areas * d_face * dpc
+            flux_corr[self._closed] = 0.0
+            flux_corr[self._inlet] = 0.0
+            self.face_flux = flux + flux_corr
+            self.velocity -= d_cell[:, None] * self._pressure_gradient(p_corr)
+            self.pressure += self.relax_pressure * p_corr
+            if self.periodic:
+                self.pressure -= self.pressure.mean()
+            scale = max(np.abs(self.face_flux).max(), 1e-30)
+            residual = np.abs(imbalance).max() / scale
+            change = np.abs(self.velocity - previous).max() / max(np.abs(self.velocity).max(), 1e-30)
+            if residual < self.tolerance and change < self.tolerance:
+                break
+        self.iterations = iteration
+        return {"iterations": iteration, "continuity_residual": residual, "velocity_change": change}
