@@ -108,3 +108,31 @@ def test_fixed_porous_zone_reproduces_the_ergun_pressure_drop():
     # to the drop per cell; a checkerboard would alternate at order one)
     second = np.diff(pc[inside], 2)
     assert np.abs(second).max() < 1e-5 * ergun * 0.015
+
+
+def duct_pressure_gradient(cells):
+    """Fully developed laminar flow in a square duct (side a, no-slip walls, Re = 1), grid cells x
+    cells across: mean axial pressure gradient over the developed second half [Pa/m]."""
+    a, length, velocity = 0.02, 0.08, 0.05
+    gas = GasProperties(density=1.0, viscosity=1e-3)
+    mesh = GasMesh.box((cells, cells, 16), (0, 0, 0), (a, a, length))
+    solver = GasSolver(mesh, gas, inlet_velocity=velocity, walls="no-slip", gravity=(0, 0, 0))
+    for _ in range(12):
+        solver.step(0.05)
+    z = mesh.cell_centers[:, 2]
+    planes = np.unique(z[(z > 0.5 * length) & (z < 0.9 * length)])
+    mean_p = [solver.pressure[np.abs(z - plane) < 1e-12].mean() for plane in planes]
+    exact = 28.454 * gas.viscosity * velocity / a ** 2  # Poiseuille number f Re = 56.91 (square duct)
+    return -np.polyfit(planes, mean_p, 1)[0], exact
+
+
+@pytest.mark.slow
+def test_square_duct_pressure_gradient_converges_at_second_order_to_the_series_solution():
+    coarse, exact = duct_pressure_gradient(6)
+    fine, _ = duct_pressure_gradient(12)
+    error_coarse, error_fine = coarse / exact - 1, fine / exact - 1
+    order = np.log(error_coarse / error_fine) / np.log(2.0)
+    print(f"\nsquare duct dp/dz error: 6 cells {error_coarse:+.4f}, 12 cells {error_fine:+.4f}, order {order:.2f}")
+    assert 1.7 < order < 2.3
+    extrapolated = fine + (fine - coarse) / 3.0  # Richardson, second order, ratio 2
+    assert extrapolated == pytest.approx(exact, rel=0.01)
