@@ -47,11 +47,16 @@ class GasSolver:
     ``velocity`` (C, 3) [m/s] interstitial; ``pressure`` (C,) [Pa] (relative to the outlet);
     ``face_flux`` (F,) [m^3/s] gas volume flux ``eps u . n A``; ``voidage`` (C,) and
     ``voidage_old`` (C,); ``beta`` (C,) [kg/(m^3 s)]; ``source`` (C, 3) [N/m^3].
+
+    ``assembly="cached"`` builds the linear systems from the cached-pattern operators (fast);
+    ``assembly="fipy"`` rebuilds them from plain FiPy terms every iteration (the reference path,
+    kept to test the fast one against).
     """
 
     def __init__(self, mesh: GasMesh, gas: GasProperties = GasProperties(), gravity=(0.0, 0.0, -9.81),
                  inlet_velocity: float = 0.0, walls: str = "no-slip", relax_velocity: float = 0.7,
-                 relax_pressure: float = 0.3, tolerance: float = 1e-8, max_iterations: int = 200):
+                 relax_pressure: float = 0.3, tolerance: float = 1e-8, max_iterations: int = 200,
+                 assembly: str = "cached"):
         self.mesh = mesh
         self.gas = gas
         self.gravity = np.asarray(gravity, float)
@@ -60,6 +65,9 @@ class GasSolver:
         self.relax_pressure = relax_pressure
         self.tolerance = tolerance
         self.max_iterations = max_iterations
+        if assembly not in ("cached", "fipy"):
+            raise ValueError(f"assembly = {assembly!r}: expected 'cached' or 'fipy'")
+        self.assembly = assembly
         n, f = mesh.cell_count, mesh.face_count
         self.periodic = all(mesh.periodic)
         self.velocity = np.zeros((n, 3))
@@ -121,6 +129,63 @@ class GasSolver:
         np.add.at(out, self._q, -face_flux[self._interior])
         return out
 
+    # ------------------------------------------------------------------ linear systems
+    def _momentum_system(self, component, implicit_cell, mass_flux, gamma_face, boundary_value):
+        """Matrix and boundary right-hand side of one velocity component's momentum equation:
+        ``diag(implicit V) + div(mass_flux u) - div(gamma grad u)`` with the component's Dirichlet
+        faces (inlet, walls) and the outlet's outflow."""
+        if self.assembly == "fipy":
+            return self._fipy_momentum_system(component, implicit_cell, mass_flux, gamma_face, boundary_value)
+        viscous = self._viscous[component]
+        matrix = (diagonal(self.mesh, implicit_cell) + self._convection.matrix(mass_flux)
+                  - viscous.matrix(gamma_face)).tocsr()
+        rhs = self._convection.rhs(mass_flux, boundary_value) - viscous.rhs(gamma_face, boundary_value)
+        return matrix, rhs
+
+    def _pressure_system(self, gamma_face):
+        """``div(gamma grad p')`` with p' = 0 on the outlet."""
+        if self.assembly == "fipy":
+            return self._fipy_pressure_system(gamma_face)
+        return self._pressure_laplacian.matrix(gamma_face)
+
+    # reference path: the same systems rebuilt from plain FiPy terms every time (slow; for tests)
+    def _fipy_linear_system(self, term, var):
+        solver = term._prepareLinearSystem(var=var, solver=None, boundaryConditions=(), dt=1.0)
+        return sp.csr_matrix(solver.matrix.matrix), np.asarray(solver.RHSvector)
+
+    def _fipy_momentum_system(self, component, implicit_cell, mass_flux, gamma_face, boundary_value):
+        import fipy
+        mesh = self.mesh
+        fm = mesh.fipy_mesh
+        var = fipy.CellVariable(mesh=fm, value=0.0)
+        dirichlet = np.zeros(mesh.face_count, bool)
+        dirichlet[self._velocity_dirichlet[component]] = True
+        if dirichlet.any():
+            var.constrain(fipy.FaceVariable(mesh=fm, value=boundary_value), where=dirichlet)
+        # FiPy's convection carries nothing through unconstrained boundary faces: the outflow through
+        # the outlet enters as an implicit source on the outlet cells
+        carried = mass_flux.copy()
+        carried[self._outlet] = 0.0
+        outflow = np.zeros(mesh.cell_count)
+        np.add.at(outflow, self._boundary_cell[self._outlet], mass_flux[self._outlet])
+        face_velocity = (carried / mesh.face_areas)[None, :] * mesh.face_normals.T
+        term = (fipy.ImplicitSourceTerm(coeff=fipy.CellVariable(mesh=fm, value=implicit_cell
+                                                                 + outflow / mesh.cell_volumes))
+                + fipy.UpwindConvectionTerm(coeff=fipy.FaceVariable(mesh=fm, rank=1, value=face_velocity))
+                - fipy.DiffusionTerm(coeff=fipy.FaceVariable(mesh=fm, value=gamma_face)))
+        return self._fipy_linear_system(term, var)
+
+    def _fipy_pressure_system(self, gamma_face):
+        import fipy
+        fm = self.mesh.fipy_mesh
+        var = fipy.CellVariable(mesh=fm, value=0.0)
+        if len(self._outlet):
+            outlet = np.zeros(self.mesh.face_count, bool)
+            outlet[self._outlet] = True
+            var.constrain(0.0, where=outlet)
+        matrix, _ = self._fipy_linear_system(fipy.DiffusionTerm(coeff=fipy.FaceVariable(mesh=fm, value=gamma_face)), var)
+        return matrix
+
     # ------------------------------------------------------------------ one time step
     def step(self, dt: float) -> dict:
         """Advance the gas by ``dt`` [s] with ``voidage``, ``voidage_old``, ``beta`` and ``source`` as
@@ -137,15 +202,11 @@ class GasSolver:
         self.face_flux[self._inlet] = self._inlet_flux
         residual = np.inf
         for iteration in range(1, self.max_iterations + 1):
-            transient = rho * eps / dt
-            convection = self._convection.matrix(rho * self.face_flux)
-            base = diagonal(mesh, transient + self.beta) + convection
+            implicit = rho * eps / dt + self.beta
             matrices, rhs = [], []
             for c in range(3):
-                a = (base - self._viscous[c].matrix(gamma)).tocsr()
-                b = (rho * eps_old / dt * u_old[:, c] + self.source[:, c] + rho * eps * self.gravity[c]) * vol
-                b = b + self._convection.rhs(rho * self.face_flux, inlet_value[:, c])
-                b = b - self._viscous[c].rhs(gamma, inlet_value[:, c])
+                a, b = self._momentum_system(c, implicit, rho * self.face_flux, gamma, inlet_value[:, c])
+                b = b + (rho * eps_old / dt * u_old[:, c] + self.source[:, c] + rho * eps * self.gravity[c]) * vol
                 matrices.append(a)
                 rhs.append(b)
             a_p = np.mean([m.diagonal() for m in matrices], axis=0) / self.relax_velocity
@@ -170,7 +231,7 @@ class GasSolver:
             flux[self._inlet] = self._inlet_flux
             # pressure correction: div(eps D grad p') = net outflow + d(eps)/dt V
             imbalance = self._net_outflow(flux) + (eps - eps_old) * vol / dt
-            laplacian = self._pressure_laplacian.matrix(eps_face * d_face).tocsc()
+            laplacian = self._pressure_system(eps_face * d_face).tocsc()
             if self.periodic:  # pressure fixed up to a constant: pin cell 0
                 p_corr = np.zeros(mesh.cell_count)
                 p_corr[1:] = spla.spsolve(laplacian[1:, 1:], imbalance[1:])
