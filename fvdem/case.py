@@ -77,7 +77,7 @@ class InsertionConfig:
 @dataclass(frozen=True)
 class ParticlesConfig:
     shape: str = spec("sphere", kind="str", choices=("sphere", "spherocylinder"))
-    count: int = spec(1000, kind="int", gt=0, doc="number of particles")
+    count: int = spec(1000, kind="int", ge=0, doc="number of particles (0: a gas-only case)")
     diameter: float = spec(5.3e-3, unit="length", gt=0.0, doc="sphere or cylinder diameter [m]")
     length: float | None = spec(None, unit="length", gt=0.0, optional=True,
                                 doc="spherocylinder length including caps [m] (> diameter)")
@@ -139,6 +139,32 @@ class OutputConfig:
 
 
 @dataclass(frozen=True)
+class PorousZoneConfig:
+    enabled: bool = spec(False, kind="bool", doc="a fixed bed: a zone of given voidage with Ergun drag on the gas")
+    lower: tuple | None = spec(None, kind="vec3", unit="length", optional=True, doc="zone lower corner [m]")
+    upper: tuple | None = spec(None, kind="vec3", unit="length", optional=True, doc="zone upper corner [m]")
+    voidage: float = spec(0.45, gt=0.0, le=1.0, doc="gas volume fraction in the zone")
+    particle_diameter: float = spec(5.3e-3, unit="length", gt=0.0, doc="Ergun particle diameter [m]")
+
+
+@dataclass(frozen=True)
+class GasConfig:
+    enabled: bool = spec(False, kind="bool", doc="solve the gas phase (FiPy grid over the domain)")
+    cells: tuple = spec((10, 10, 70), kind="int3", ge=1, doc="grid cells along x, y, z")
+    density: float = spec(1.2, unit="density", gt=0.0, doc="gas density [kg/m^3]")
+    viscosity: float = spec(1.568e-5, gt=0.0, doc="dynamic viscosity [Pa s]")
+    inlet_velocity: float = spec(0.0, unit="velocity", ge=0.0,
+                                 doc="superficial gas velocity through the bottom (distributor) [m/s]")
+    walls: str = spec("no-slip", kind="str", choices=("no-slip", "free-slip"), doc="side-wall condition")
+    cfd_step: float = spec(1.0e-4, unit="time", gt=0.0, doc="CFD time step [s]")
+    scheme: str = spec("piso", kind="str", choices=("piso", "simple"), doc="pressure-velocity coupling")
+    correctors: int = spec(2, kind="int", ge=1, doc="PISO pressure corrections per step")
+    linear_solver: str = spec("iterative", kind="str", choices=("iterative", "direct"))
+    linear_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0, doc="relative tolerance of the linear solves")
+    porous_zone: PorousZoneConfig = section(PorousZoneConfig)
+
+
+@dataclass(frozen=True)
 class RunConfig:
     threads: int = spec(0, kind="int", ge=0, doc="numba threads (0: all cores)")
 
@@ -152,6 +178,7 @@ class Case:
     contact: ContactConfig = section(ContactConfig)
     time: TimeConfig = section(TimeConfig)
     output: OutputConfig = section(OutputConfig)
+    gas: GasConfig = section(GasConfig)
     run: RunConfig = section(RunConfig)
     source: str | None = field(default=None, compare=False, metadata=dict(kind="internal"))
 
@@ -176,7 +203,7 @@ def _describe_rule(meta) -> str:
     if meta.get("choices"):
         return "one of " + ", ".join(repr(c) for c in meta["choices"])
     kinds = {"float": "a number", "int": "an integer", "bool": "true or false", "str": "a string",
-             "vec3": "a list of 3 numbers", "bool3": "a list of 3 booleans"}
+             "vec3": "a list of 3 numbers", "bool3": "a list of 3 booleans", "int3": "a list of 3 integers"}
     parts.append(kinds[meta["kind"]])
     for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
         if meta.get(key) is not None:
@@ -253,11 +280,11 @@ def _convert(value, meta, path, problems):
             problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
             return None
         return value
-    if kind in ("vec3", "bool3"):
+    if kind in ("vec3", "bool3", "int3"):
         if not isinstance(value, (list, tuple)) or len(value) != 3:
             problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
             return None
-        item_meta = dict(meta, kind="float" if kind == "vec3" else "bool")
+        item_meta = dict(meta, kind={"vec3": "float", "bool3": "bool", "int3": "int"}[kind])
         items = [_convert(v, item_meta, f"{path}[{k}]", problems) for k, v in enumerate(value)]
         return None if any(v is None for v in items) else tuple(items)
     raise AssertionError(kind)
@@ -290,7 +317,32 @@ def _build(cls, table, path, problems):
     return cls(**values)
 
 
+def _gas_checks(case: Case, problems: list) -> None:
+    g = case.gas
+    if case.particles.count == 0 and not g.enabled:
+        problems.append("particles.count = 0: a case without particles needs the gas phase (gas.enabled = true)")
+    if not g.enabled:
+        return
+    periodic = case.domain.periodic
+    if any(periodic) and not all(periodic):
+        problems.append(f"domain.periodic = {list(periodic)}: with the gas phase the box is periodic on all axes "
+                        "or on none")
+    if all(periodic) and g.inlet_velocity > 0:
+        problems.append(f"gas.inlet_velocity = {g.inlet_velocity:g}: a periodic box has no inlet")
+    if case.particles.count > 0:
+        ratio = g.cfd_step / case.time.dem_step
+        if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
+            problems.append(f"gas.cfd_step = {g.cfd_step:g}: must be a whole multiple of time.dem_step = "
+                            f"{case.time.dem_step:g}")
+    zone = g.porous_zone
+    if zone.enabled and (zone.lower is None or zone.upper is None):
+        problems.append("gas.porous_zone: lower and upper corners are required when enabled")
+
+
 def _cross_checks(case: Case, problems: list) -> None:
+    _gas_checks(case, problems)
+    if case.particles.count == 0:
+        return
     p = case.particles
     lower, upper = case.domain.lower, case.domain.upper
     if any(u <= lo for lo, u in zip(lower, upper)):

@@ -41,9 +41,11 @@ def cmd_run(args) -> int:
               file=sys.stderr)
         return 130
     keys = ("simulated_time", "steps", "wall_seconds", "bed_height", "solids_fraction", "contacts_per_particle",
-            "max_overlap_over_diameter")
-    print(json.dumps({k: round(summary[k], 12) if isinstance(summary[k], float) else summary[k] for k in keys}))
-    print(f"results in {out}/ (particles.pvd for ParaView, timeseries.csv, summary.json)")
+            "max_overlap_over_diameter", "porous_zone_pressure_gradient", "expected_pressure_gradient")
+    print(json.dumps({k: round(summary[k], 12) if isinstance(summary[k], float) else summary[k]
+                      for k in keys if k in summary}))
+    views = " and ".join(name for name in ("particles.pvd", "gas.pvd") if (out / name).exists())
+    print(f"results in {out}/ ({views or 'no snapshots'} for ParaView, timeseries.csv, summary.json)")
     return 0
 
 

@@ -23,14 +23,16 @@ from .case import Case, CaseError, to_toml
 from .dem.insertion import insert_particles
 from .dem.particles import ParticleArrays
 from .dem.system import Box, ContactModel, DEMSystem, SimulationError
+from .gas.phase import GasPhase
 from .io.checkpoint import load_checkpoint, save_checkpoint
 from .io.timeseries import TimeseriesWriter
-from .io.vtk import write_particles_vtu, write_pvd
+from .io.vtk import write_gas_vtu, write_particles_vtu, write_pvd
 
 CHECKPOINT = "checkpoint.npz"
 FINAL_STATE = "final_state.npz"
 TIMESERIES_COLUMNS = ("time", "kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle",
                       "bed_top", "rms_speed", "max_speed")
+GAS_TIMESERIES_COLUMNS = ("gas_max_speed", "gas_inlet_pressure")
 
 
 class OutputError(RuntimeError):
@@ -117,6 +119,7 @@ class _Schedule:
 @dataclass
 class _WriterState:
     pvd_entries: list = field(default_factory=list)
+    gas_pvd_entries: list = field(default_factory=list)
     wall_seconds: float = 0.0
     cpu_seconds: float = 0.0
     settled: bool = False
@@ -140,37 +143,79 @@ class Simulation:
         self.progress = case.output.progress if progress is None else progress
         self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
         self.writers = _WriterState()
-        dt = case.time.dem_step
+        # the loop counts DEM steps when there are particles, CFD steps in a gas-only case
+        has_particles = case.particles.count > 0
+        dt = case.time.dem_step if has_particles else case.gas.cfd_step
+        self._dt = dt
+        self._cfd_every = max(1, round(case.gas.cfd_step / case.time.dem_step)) if has_particles else 1
+        self.gas = GasPhase(case) if case.gas.enabled else None
         self._timeseries_schedule = _Schedule(max(1, round(case.output.timeseries_interval / dt)))
         self._snapshot_schedule = _Schedule(max(1, round(case.output.snapshot_interval / dt)))
         self._checkpoint_schedule = _Schedule(max(1, round(case.output.checkpoint_interval / dt)))
         self._stop_requested = False
         if resume:
             arrays, meta = load_checkpoint(self.out / CHECKPOINT)
-            particles = ParticleArrays.from_dict({k.split(".", 1)[1]: v for k, v in arrays.items()
-                                                  if k.startswith("particles.")})
-            self.dem = build_dem(case, particles)
-            self.dem.restore(arrays)
+            self.dem = None
+            if has_particles:
+                particles = ParticleArrays.from_dict({k.split(".", 1)[1]: v for k, v in arrays.items()
+                                                      if k.startswith("particles.")})
+                self.dem = build_dem(case, particles)
+                self.dem.restore(arrays)
+            if self.gas is not None:
+                self.gas.restore(arrays)
             self.writers = _WriterState(**meta["writers"])
-            self._timeseries().start(resume_time=self.dem.time)
+            self._timeseries().start(resume_time=self.time)
         else:
-            self.dem = build_dem(case, build_particles(case))
+            self.dem = build_dem(case, build_particles(case)) if has_particles else None
             if self.out is not None:
                 (self.out / "case.toml").write_text(to_toml(case))
                 self._timeseries().start()
-                self._on_events(self.dem.step_count)
+                self._on_events(self.step_count)
 
     # ------------------------------------------------------------------ state access
     @property
-    def particles(self) -> ParticleArrays:
-        return self.dem.particles
+    def particles(self) -> ParticleArrays | None:
+        return self.dem.particles if self.dem is not None else None
+
+    @property
+    def step_count(self) -> int:
+        """Steps of the loop: DEM steps, or CFD steps in a gas-only case."""
+        return self.dem.step_count if self.dem is not None else self.gas.step_count
 
     @property
     def time(self) -> float:
-        return self.dem.time
+        return self.step_count * self._dt
+
+    @property
+    def time_step(self) -> float:
+        """The loop's step [s]: the DEM step, or the CFD step in a gas-only case."""
+        return self._dt
+
+    def _advance(self, steps: int) -> None:
+        """Advance ``steps`` loop steps; with both phases, a gas step every ``cfd_step / dem_step`` DEM
+        steps (the phases are not coupled yet: the coupling bridge is issue 4)."""
+        if self.dem is None:
+            for _ in range(steps):
+                self.gas.step()
+            return
+        if self.gas is None:
+            self.dem.step(steps)
+            return
+        remaining = steps
+        while remaining > 0:
+            chunk = min(remaining, self._cfd_every - self.dem.step_count % self._cfd_every)
+            self.dem.step(chunk)
+            remaining -= chunk
+            if self.dem.step_count % self._cfd_every == 0:
+                self.gas.step()
 
     def diagnostics(self) -> dict:
-        diag = self.dem.diagnostics()
+        diag = {"time": self.time}
+        if self.gas is not None:
+            diag.update(self.gas.diagnostics())
+        if self.dem is None:
+            return diag
+        diag.update(self.dem.diagnostics())
         p = self.particles
         diag["bed_top"] = bed_top(p.position, p.axis, p.radius, p.half_length)
         return diag
@@ -183,24 +228,24 @@ class Simulation:
     def run(self, duration: float | None = None) -> dict:
         """Advance ``duration`` [s] of simulated time (default: to ``time.end``), or until settled /
         stopped. Returns the summary dictionary (also written as summary.json with an output folder)."""
-        dt = self.dem.dt
+        dt = self._dt
         end_time = self.case.time.end if duration is None else self.time + duration
         end_step = int(round(end_time / dt))
-        start_step = self.dem.step_count
+        start_step = self.step_count
         bar = self._progress_bar(end_time)
         wall0, cpu0 = _time.perf_counter(), _time.process_time()
         handlers = self._install_signal_handlers()
         try:
-            while self.dem.step_count < end_step and not self._stop_requested and not self.writers.settled:
-                step = self.dem.step_count
+            while self.step_count < end_step and not self._stop_requested and not self.writers.settled:
+                step = self.step_count
                 target = min(end_step, self._next_event(step), step + 500)
-                self.dem.step(target - step)
-                self._on_events(self.dem.step_count)
+                self._advance(target - step)
+                self._on_events(self.step_count)
                 if bar is not None:
                     bar.update(self.time - bar.n)
                     elapsed = _time.perf_counter() - wall0
                     if elapsed > 0:
-                        bar.set_postfix_str(f"{(self.dem.step_count - start_step) / elapsed:.0f} steps/s",
+                        bar.set_postfix_str(f"{(self.step_count - start_step) / elapsed:.0f} steps/s",
                                             refresh=False)
         finally:
             self._restore_signal_handlers(handlers)
@@ -208,7 +253,7 @@ class Simulation:
                 bar.close()
             self.writers.wall_seconds += _time.perf_counter() - wall0
             self.writers.cpu_seconds += _time.process_time() - cpu0
-        steps = self.dem.step_count - start_step
+        steps = self.step_count - start_step
         summary = self.summary(steps, _time.perf_counter() - wall0)
         if self.out is not None:
             self._write_checkpoint()
@@ -223,63 +268,93 @@ class Simulation:
 
     def _on_events(self, step: int) -> None:
         if self._timeseries_schedule.due(step):
-            self.dem.check_health()
+            if self.dem is not None:
+                self.dem.check_health()
+            if self.gas is not None:
+                self.gas.check_health(self.time)
             diag = self.diagnostics()
             if self.out is not None:
                 self._timeseries().append(diag)
             t = self.case.time
-            if t.stop_when_settled and self.time >= t.min_time and step > 0 and diag["rms_speed"] < t.settled_speed:
+            if (self.dem is not None and t.stop_when_settled and self.time >= t.min_time and step > 0
+                    and diag["rms_speed"] < t.settled_speed):
                 self.writers.settled = True
         if self.out is None:
             return
         if self.case.output.vtk and self._snapshot_schedule.due(step):
-            name = f"particles_{len(self.writers.pvd_entries):05d}.vtu"
-            write_particles_vtu(self.out / name, self.particles)
-            self.writers.pvd_entries.append((self.time, name))
-            write_pvd(self.out / "particles.pvd", self.writers.pvd_entries)
+            if self.dem is not None:
+                name = f"particles_{len(self.writers.pvd_entries):05d}.vtu"
+                write_particles_vtu(self.out / name, self.particles)
+                self.writers.pvd_entries.append((self.time, name))
+                write_pvd(self.out / "particles.pvd", self.writers.pvd_entries)
+            if self.gas is not None:
+                name = f"gas_{len(self.writers.gas_pvd_entries):05d}.vtu"
+                write_gas_vtu(self.out / name, self.gas.mesh, self.gas.solver)
+                self.writers.gas_pvd_entries.append((self.time, name))
+                write_pvd(self.out / "gas.pvd", self.writers.gas_pvd_entries)
         if self._checkpoint_schedule.due(step) and step > 0:
             self._write_checkpoint()
 
     def _timeseries(self) -> TimeseriesWriter:
-        return TimeseriesWriter(self.out / "timeseries.csv", TIMESERIES_COLUMNS)
+        columns = ("time",) + (TIMESERIES_COLUMNS[1:] if self.dem is not None else ())
+        if self.gas is not None:
+            columns += GAS_TIMESERIES_COLUMNS
+            if self.gas.zone.any():
+                columns += ("porous_zone_pressure_gradient",)
+        return TimeseriesWriter(self.out / "timeseries.csv", columns)
 
     # ------------------------------------------------------------------ outputs
     def summary(self, steps: int = 0, wall: float = 0.0) -> dict:
-        n = self.particles.count
         diag = self.diagnostics()
         summary = {
             "case": self.case.name,
-            "particles": n,
-            "shape": self.case.particles.shape,
             "simulated_time": self.time,
-            "steps": self.dem.step_count,
+            "steps": self.step_count,
             "settled": self.writers.settled,
             "stopped_early": self._stop_requested,
             "threads": self.threads,
             "wall_seconds": self.writers.wall_seconds,
             "cpu_seconds": self.writers.cpu_seconds,
+        }
+        if self.gas is not None:
+            summary.update({k: v for k, v in diag.items() if k.startswith(("gas_", "porous_", "ergun_", "expected_"))})
+            summary["gas_cells"] = self.gas.mesh.cell_count
+            summary["gas_courant_number"] = self.gas.courant_number()
+        if self.dem is None:
+            return summary
+        n = self.particles.count
+        summary.update({
+            "particles": n,
+            "shape": self.case.particles.shape,
             "ns_per_particle_step_last_run": 1e9 * wall / (steps * n) if steps else None,
             "collision_time": self.case.collision_time(),
             "neighbour_rebuilds": self.dem.rebuild_count,
             **{k: diag[k] for k in ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle",
                                     "wall_contacts", "rms_speed", "max_speed")},
-        }
+        })
         summary.update(packed_bed_summary(self.particles, self.dem.box))
         return summary
 
     def _write_checkpoint(self) -> None:
-        meta = {"writers": {"pvd_entries": self.writers.pvd_entries, "wall_seconds": self.writers.wall_seconds,
-                            "cpu_seconds": self.writers.cpu_seconds, "settled": self.writers.settled},
+        meta = {"writers": {"pvd_entries": self.writers.pvd_entries, "gas_pvd_entries": self.writers.gas_pvd_entries,
+                            "wall_seconds": self.writers.wall_seconds, "cpu_seconds": self.writers.cpu_seconds,
+                            "settled": self.writers.settled},
                 "time": self.time}
-        save_checkpoint(self.out / CHECKPOINT, self.dem.state(), meta)
+        state = {}
+        if self.dem is not None:
+            state.update(self.dem.state())
+        if self.gas is not None:
+            state.update(self.gas.state())
+        save_checkpoint(self.out / CHECKPOINT, state, meta)
 
     def _write_final(self, summary: dict) -> None:
         p = self.particles
-        order = np.argsort(p.ids, kind="stable")
-        tmp = self.out / (FINAL_STATE + ".tmp")
-        with open(tmp, "wb") as fh:
-            np.savez(fh, **{k: v[order] for k, v in p.as_dict().items()})
-        os.replace(tmp, self.out / FINAL_STATE)
+        if p is not None:
+            order = np.argsort(p.ids, kind="stable")
+            tmp = self.out / (FINAL_STATE + ".tmp")
+            with open(tmp, "wb") as fh:
+                np.savez(fh, **{k: v[order] for k, v in p.as_dict().items()})
+            os.replace(tmp, self.out / FINAL_STATE)
         (self.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
 
     def _progress_bar(self, end_time: float):

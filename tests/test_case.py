@@ -119,8 +119,8 @@ def test_every_case_file_validates_and_runs_a_step(path):
     if case.particles.initial_state and not case.resolve_path(case.particles.initial_state).exists():
         pytest.skip(f"{path.name} starts from {case.particles.initial_state}, produced by another case")
     sim = fvdem.Simulation(case, progress=False)
-    sim.run(case.time.dem_step)
-    assert sim.dem.step_count == 1
+    sim.run(sim.time_step)
+    assert sim.step_count == 1
 
 
 def test_run_writes_outputs_and_never_overwrites(tmp_path):

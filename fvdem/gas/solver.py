@@ -89,6 +89,7 @@ class GasSolver:
         self.factorizations = 0  # pressure-preconditioner factorizations
         self.refactor_interval = 200
         self._pressure_lu = None
+        self._pressure_factor_matrix = None
         self._steps_since_factor = 0
         b = mesh.boundary_faces
         self._inlet = b["z-"]
@@ -234,10 +235,16 @@ class GasSolver:
         ``refactor_interval`` steps or when CG needs more than 25 iterations."""
         if (self._pressure_lu is None or self._pressure_lu.shape != matrix.shape
                 or self._steps_since_factor >= self.refactor_interval):
-            self._pressure_lu = spla.splu(matrix.tocsc())
-            self._steps_since_factor = 0
+            self.set_preconditioner_matrix(matrix.tocsc())
             self.factorizations += 1
         return spla.LinearOperator(matrix.shape, matvec=self._pressure_lu.solve)
+
+    def set_preconditioner_matrix(self, matrix, steps_since_factor: int = 0) -> None:
+        """Factorize ``matrix`` as the pressure preconditioner (also used to restore a checkpoint:
+        refactoring the same matrix reproduces the same factorization, so a resumed run is bit-for-bit)."""
+        self._pressure_factor_matrix = sp.csc_matrix(matrix)
+        self._pressure_lu = spla.splu(self._pressure_factor_matrix)
+        self._steps_since_factor = steps_since_factor
 
     def _predict_momentum(self, dt, u_old, gamma, inlet_value, relax):
         """Solve the three momentum components with the current pressure; returns ``(a_P, grad p)``."""

@@ -44,3 +44,37 @@ def write_pvd(path, entries) -> None:
     tmp = Path(str(path) + ".tmp")
     tmp.write_text("\n".join(lines))
     os.replace(tmp, path)
+
+
+def gas_grid(mesh):
+    """Points and VTK hexahedra of a structured ``GasMesh`` in FiPy's cell order (x fastest)."""
+    nx, ny, nz = mesh.shape
+    dx, dy, dz = mesh.spacing
+    origin = mesh.cell_centers[0] - 0.5 * np.array([dx, dy, dz])
+    gx, gy, gz = np.meshgrid(np.arange(nx + 1) * dx, np.arange(ny + 1) * dy, np.arange(nz + 1) * dz, indexing="ij")
+    points = origin + np.stack([gx.ravel(order="F"), gy.ravel(order="F"), gz.ravel(order="F")], axis=1)
+
+    def vid(i, j, k):
+        return i + (nx + 1) * (j + (ny + 1) * k)
+    i, j, k = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    i, j, k = i.ravel(order="F"), j.ravel(order="F"), k.ravel(order="F")
+    hexes = np.stack([vid(i, j, k), vid(i + 1, j, k), vid(i + 1, j + 1, k), vid(i, j + 1, k),
+                      vid(i, j, k + 1), vid(i + 1, j, k + 1), vid(i + 1, j + 1, k + 1), vid(i, j + 1, k + 1)], axis=1)
+    centres = points[hexes].mean(axis=1)
+    if not np.allclose(centres, mesh.cell_centers, atol=1e-9 * max(mesh.spacing)):
+        raise ValueError("gas grid cell order differs from FiPy's (x fastest, then y, then z)")
+    return points, hexes
+
+
+def write_gas_vtu(path, mesh, solver) -> None:
+    """Gas fields as cell data: interstitial and superficial velocity [m/s], pressure [Pa], voidage."""
+    points, hexes = gas_grid(mesh)
+    cell_data = {
+        "velocity": [solver.velocity],
+        "superficial_velocity": [solver.velocity * solver.voidage[:, None]],
+        "pressure": [solver.pressure],
+        "voidage": [solver.voidage],
+    }
+    tmp = Path(str(path) + ".tmp.vtu")
+    meshio.write(tmp, meshio.Mesh(points, [("hexahedron", hexes)], cell_data=cell_data), binary=True)
+    os.replace(tmp, path)

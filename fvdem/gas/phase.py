@@ -1,0 +1,116 @@
+"""The gas phase of a case: grid, solver, fixed porous zone, diagnostics and checkpoint state."""
+from __future__ import annotations
+
+import numpy as np
+
+from .mesh import GasMesh
+from .solver import GasProperties, GasSolver
+
+
+class GasPhase:
+    """Gas grid over the case domain and its solver; a fixed porous zone (a fixed bed) when configured.
+
+    In the porous zone the voidage is fixed and the interphase coefficient is Ergun's, written on the
+    interstitial velocity (Gidaspow's dense branch, evaluated each step with the local gas speed):
+    ``beta = 150 eps_s^2 mu / (eps d^2) + 1.75 eps_s rho |u| / d``.
+    """
+
+    def __init__(self, case):
+        g = case.gas
+        self.config = g
+        self.mesh = GasMesh.box(g.cells, case.domain.lower, case.domain.upper, case.domain.periodic)
+        self.solver = GasSolver(self.mesh, GasProperties(g.density, g.viscosity), case.domain.gravity,
+                                inlet_velocity=g.inlet_velocity, walls=g.walls, scheme=g.scheme,
+                                correctors=g.correctors, linear_solver=g.linear_solver,
+                                linear_tolerance=g.linear_tolerance)
+        self.dt = g.cfd_step
+        self.step_count = 0
+        zone = g.porous_zone
+        centres = self.mesh.cell_centers
+        if zone.enabled:
+            self.zone = np.all((centres >= np.asarray(zone.lower)) & (centres <= np.asarray(zone.upper)), axis=1)
+        else:
+            self.zone = np.zeros(self.mesh.cell_count, bool)
+        self.solver.voidage[self.zone] = zone.voidage
+        self.solver.voidage_old[:] = self.solver.voidage
+
+    def _update_porous_zone(self) -> None:
+        if not self.zone.any():
+            return
+        z = self.config.porous_zone
+        solids = 1.0 - z.voidage
+        speed = np.linalg.norm(self.solver.velocity[self.zone], axis=1)
+        self.solver.beta[self.zone] = (150.0 * solids ** 2 * self.config.viscosity / (z.voidage * z.particle_diameter ** 2)
+                                       + 1.75 * solids * self.config.density * speed / z.particle_diameter)
+
+    def step(self) -> dict:
+        self._update_porous_zone()
+        self.solver.voidage_old[:] = self.solver.voidage
+        info = self.solver.step(self.dt)
+        self.step_count += 1
+        return info
+
+    # ------------------------------------------------------------------ observables
+    def plane_pressure(self, height: float) -> float:
+        """Mean pressure [Pa] of the cell layer nearest to ``height`` [m]."""
+        z = self.mesh.cell_centers[:, 2]
+        layer = np.abs(z - z[np.argmin(np.abs(z - height))]) < 1e-9
+        return float(self.solver.pressure[layer].mean())
+
+    def diagnostics(self) -> dict:
+        s = self.solver
+        diag = {"gas_max_speed": float(np.linalg.norm(s.velocity, axis=1).max()),
+                "gas_inlet_pressure": self.plane_pressure(self.mesh.cell_centers[:, 2].min())}
+        if self.zone.any():
+            z = self.config.porous_zone
+            lo, hi = z.lower[2], z.upper[2]
+            inset = 0.25 * (hi - lo)
+            a, b = lo + inset, hi - inset
+            diag["porous_zone_pressure_gradient"] = (self.plane_pressure(a) - self.plane_pressure(b)) / (
+                self.mesh.cell_centers[np.argmin(np.abs(self.mesh.cell_centers[:, 2] - b)), 2]
+                - self.mesh.cell_centers[np.argmin(np.abs(self.mesh.cell_centers[:, 2] - a)), 2])
+            u = self.config.inlet_velocity
+            solids = 1.0 - z.voidage
+            diag["ergun_pressure_gradient"] = (150 * solids ** 2 * self.config.viscosity * u
+                                               / (z.voidage ** 3 * z.particle_diameter ** 2)
+                                               + 1.75 * solids * self.config.density * u ** 2
+                                               / (z.voidage ** 3 * z.particle_diameter))
+            # the measured gradient also carries the gas's own weight: -dp/dz = beta u / eps - rho g_z
+            diag["expected_pressure_gradient"] = (diag["ergun_pressure_gradient"]
+                                                  - self.config.density * self.solver.gravity[2])
+        return diag
+
+    def check_health(self, time: float) -> None:
+        s = self.solver
+        if not (np.all(np.isfinite(s.velocity)) and np.all(np.isfinite(s.pressure))):
+            from ..dem.system import SimulationError
+            raise SimulationError(f"non-finite gas velocity or pressure at t = {time:.6g} s; CFD step {self.dt:.3g} s, "
+                                  f"largest Courant number {self.courant_number():.3g}")
+
+    def courant_number(self) -> float:
+        speed = np.abs(self.solver.velocity).max(axis=0)
+        return float(np.max(speed * self.dt / np.asarray(self.mesh.spacing)))
+
+    # ------------------------------------------------------------------ checkpoint state
+    def state(self) -> dict:
+        s = self.solver
+        state = {"gas.velocity": s.velocity, "gas.pressure": s.pressure, "gas.face_flux": s.face_flux,
+                 "gas.voidage": s.voidage, "gas.beta": s.beta,
+                 "gas.counters": np.array([self.step_count, s._steps_since_factor, s.factorizations])}
+        if s._pressure_lu is not None:  # the preconditioner's matrix, to refactor it identically
+            m = s._pressure_factor_matrix
+            state.update({"gas.preconditioner.data": m.data, "gas.preconditioner.indices": m.indices,
+                          "gas.preconditioner.indptr": m.indptr, "gas.preconditioner.shape": np.array(m.shape)})
+        return state
+
+    def restore(self, data) -> None:
+        s = self.solver
+        for name in ("velocity", "pressure", "face_flux", "voidage", "beta"):
+            setattr(s, name, np.array(data[f"gas.{name}"], copy=True))
+        s.voidage_old = s.voidage.copy()
+        self.step_count, since_factor, s.factorizations = (int(v) for v in data["gas.counters"])
+        if "gas.preconditioner.data" in data:
+            import scipy.sparse as sp
+            matrix = sp.csc_matrix((data["gas.preconditioner.data"], data["gas.preconditioner.indices"],
+                                    data["gas.preconditioner.indptr"]), shape=tuple(data["gas.preconditioner.shape"]))
+            s.set_preconditioner_matrix(matrix, since_factor)
