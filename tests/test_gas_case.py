@@ -41,3 +41,20 @@ def test_gas_case_resumes_bit_for_bit(tmp_path):
     resumed.run()
     np.testing.assert_array_equal(straight.gas.solver.velocity, resumed.gas.solver.velocity)
     np.testing.assert_array_equal(straight.gas.solver.pressure, resumed.gas.solver.pressure)
+
+
+def test_periodic_gas_box_accelerates_under_its_body_force():
+    """Fully periodic box, no particles, no walls: body force and gravity accelerate the gas uniformly,
+    u = (f / rho + g) t (a periodic pressure cannot hold up the gas's weight; exact under implicit
+    Euler)."""
+    from fvdem.case import case_from_dict
+    case = case_from_dict({
+        "domain": {"upper": [0.04, 0.04, 0.08], "periodic": [True, True, True]},
+        "particles": {"count": 0},
+        "gas": {"enabled": True, "cells": [4, 4, 8], "body_force": [0.0, 0.0, 1.2], "cfd_step": 1e-3},
+        "time": {"end": 0.01}, "output": {"progress": False}})
+    sim = fvdem.Simulation(case)
+    sim.run()
+    u = sim.gas.solver.velocity
+    np.testing.assert_allclose(u[:, 2], (1.2 / 1.2 - 9.81) * 0.01, rtol=1e-9)
+    assert np.abs(u[:, :2]).max() < 1e-12

@@ -1,8 +1,9 @@
-"""The one adapter between fvdem and FiPy's meshes.
+"""The one adapter between fvdem and FiPy.
 
 Everything else in fvdem reads mesh geometry from a ``GasMesh`` as plain numpy arrays with
 snake_case names; FiPy-specific attributes (some of them private, such as face areas and cell
-distances) are touched here only.
+distances) are touched here only. The reference path of the gas solver, which rebuilds its linear
+systems from plain FiPy terms (``fipy_momentum_system``, ``fipy_pressure_system``), lives here too.
 
 FiPy's naming on a ``Grid3D``: ``facesLeft/Right`` are x faces, ``facesBottom/Top`` are **y** faces,
 and ``facesFront`` (z = 0) / ``facesBack`` (z = max) are the z faces. ``GasMesh.boundary_faces``
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 
 import fipy
 import numpy as np
+import scipy.sparse as sp
 
 BOUNDARIES = ("x-", "x+", "y-", "y+", "z-", "z+")
 
@@ -102,3 +104,46 @@ class GasMesh:
             face_areas=np.asarray(mesh._faceAreas).copy(), face_normals=np.asarray(mesh.faceNormals).T.copy(),
             face_distances=np.asarray(mesh._cellDistances).copy(), boundary_faces=groups,
         )
+
+
+# --------------------------------------------------------------------------- reference path
+def _fipy_linear_system(term, var):
+    """Matrix and right-hand side FiPy assembles for ``term == 0`` in ``var`` (no solve)."""
+    solver = term._prepareLinearSystem(var=var, solver=None, boundaryConditions=(), dt=1.0)
+    return sp.csr_matrix(solver.matrix.matrix), np.asarray(solver.RHSvector)
+
+
+def fipy_momentum_system(mesh: GasMesh, implicit_cell, mass_flux, gamma_face, boundary_value, dirichlet_faces,
+                         outlet_faces):
+    """One velocity component's momentum system from plain FiPy terms:
+    ``ImplicitSourceTerm(implicit) + UpwindConvectionTerm(mass flux) - DiffusionTerm(gamma)`` with
+    Dirichlet ``boundary_value`` on ``dirichlet_faces``. FiPy's convection carries nothing through
+    unconstrained boundary faces, so the outflow through ``outlet_faces`` enters as an implicit
+    source on their cells."""
+    fm = mesh.fipy_mesh
+    var = fipy.CellVariable(mesh=fm, value=0.0)
+    dirichlet = np.zeros(mesh.face_count, bool)
+    dirichlet[dirichlet_faces] = True
+    if dirichlet.any():
+        var.constrain(fipy.FaceVariable(mesh=fm, value=boundary_value), where=dirichlet)
+    carried = mass_flux.copy()
+    carried[outlet_faces] = 0.0
+    outflow = np.zeros(mesh.cell_count)
+    np.add.at(outflow, mesh.face_cells[outlet_faces, 0], mass_flux[outlet_faces])
+    face_velocity = (carried / mesh.face_areas)[None, :] * mesh.face_normals.T
+    term = (fipy.ImplicitSourceTerm(coeff=fipy.CellVariable(mesh=fm, value=implicit_cell + outflow / mesh.cell_volumes))
+            + fipy.UpwindConvectionTerm(coeff=fipy.FaceVariable(mesh=fm, rank=1, value=face_velocity))
+            - fipy.DiffusionTerm(coeff=fipy.FaceVariable(mesh=fm, value=gamma_face)))
+    return _fipy_linear_system(term, var)
+
+
+def fipy_pressure_system(mesh: GasMesh, gamma_face, outlet_faces):
+    """``DiffusionTerm(gamma)`` for the pressure correction, p' = 0 on ``outlet_faces``."""
+    fm = mesh.fipy_mesh
+    var = fipy.CellVariable(mesh=fm, value=0.0)
+    if len(outlet_faces):
+        outlet = np.zeros(mesh.face_count, bool)
+        outlet[outlet_faces] = True
+        var.constrain(0.0, where=outlet)
+    matrix, _ = _fipy_linear_system(fipy.DiffusionTerm(coeff=fipy.FaceVariable(mesh=fm, value=gamma_face)), var)
+    return matrix

@@ -24,6 +24,7 @@ class GasPhase:
                                 correctors=g.correctors, linear_solver=g.linear_solver,
                                 linear_tolerance=g.linear_tolerance)
         self.dt = g.cfd_step
+        self.solver.source[:] = np.asarray(g.body_force, float)
         self.step_count = 0
         zone = g.porous_zone
         centres = self.mesh.cell_centers

@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .mesh import GasMesh
+from .mesh import GasMesh, fipy_momentum_system, fipy_pressure_system
 from .operators import DiffusionOperator, UpwindConvectionOperator, diagonal
 
 
@@ -152,7 +152,8 @@ class GasSolver:
         ``diag(implicit V) + div(mass_flux u) - div(gamma grad u)`` with the component's Dirichlet
         faces (inlet, walls) and the outlet's outflow."""
         if self.assembly == "fipy":
-            return self._fipy_momentum_system(component, implicit_cell, mass_flux, gamma_face, boundary_value)
+            return fipy_momentum_system(self.mesh, implicit_cell, mass_flux, gamma_face, boundary_value,
+                                        self._velocity_dirichlet[component], self._outlet)
         viscous = self._viscous[component]
         matrix = (diagonal(self.mesh, implicit_cell) + self._convection.matrix(mass_flux)
                   - viscous.matrix(gamma_face)).tocsr()
@@ -162,48 +163,9 @@ class GasSolver:
     def _pressure_system(self, gamma_face):
         """``div(gamma grad p')`` with p' = 0 on the outlet."""
         if self.assembly == "fipy":
-            return self._fipy_pressure_system(gamma_face)
+            return fipy_pressure_system(self.mesh, gamma_face, self._outlet)
         return self._pressure_laplacian.matrix(gamma_face)
 
-    # reference path: the same systems rebuilt from plain FiPy terms every time (slow; for tests)
-    def _fipy_linear_system(self, term, var):
-        solver = term._prepareLinearSystem(var=var, solver=None, boundaryConditions=(), dt=1.0)
-        return sp.csr_matrix(solver.matrix.matrix), np.asarray(solver.RHSvector)
-
-    def _fipy_momentum_system(self, component, implicit_cell, mass_flux, gamma_face, boundary_value):
-        import fipy
-        mesh = self.mesh
-        fm = mesh.fipy_mesh
-        var = fipy.CellVariable(mesh=fm, value=0.0)
-        dirichlet = np.zeros(mesh.face_count, bool)
-        dirichlet[self._velocity_dirichlet[component]] = True
-        if dirichlet.any():
-            var.constrain(fipy.FaceVariable(mesh=fm, value=boundary_value), where=dirichlet)
-        # FiPy's convection carries nothing through unconstrained boundary faces: the outflow through
-        # the outlet enters as an implicit source on the outlet cells
-        carried = mass_flux.copy()
-        carried[self._outlet] = 0.0
-        outflow = np.zeros(mesh.cell_count)
-        np.add.at(outflow, self._boundary_cell[self._outlet], mass_flux[self._outlet])
-        face_velocity = (carried / mesh.face_areas)[None, :] * mesh.face_normals.T
-        term = (fipy.ImplicitSourceTerm(coeff=fipy.CellVariable(mesh=fm, value=implicit_cell
-                                                                 + outflow / mesh.cell_volumes))
-                + fipy.UpwindConvectionTerm(coeff=fipy.FaceVariable(mesh=fm, rank=1, value=face_velocity))
-                - fipy.DiffusionTerm(coeff=fipy.FaceVariable(mesh=fm, value=gamma_face)))
-        return self._fipy_linear_system(term, var)
-
-    def _fipy_pressure_system(self, gamma_face):
-        import fipy
-        fm = self.mesh.fipy_mesh
-        var = fipy.CellVariable(mesh=fm, value=0.0)
-        if len(self._outlet):
-            outlet = np.zeros(self.mesh.face_count, bool)
-            outlet[self._outlet] = True
-            var.constrain(0.0, where=outlet)
-        matrix, _ = self._fipy_linear_system(fipy.DiffusionTerm(coeff=fipy.FaceVariable(mesh=fm, value=gamma_face)), var)
-        return matrix
-
-    # ------------------------------------------------------------------ one time step
     def _solve(self, matrix, rhs, guess, symmetric_negative=False):
         """Linear solve: direct (``linear_solver='direct'``) or warm-started Krylov: BiCGStab with a
         Jacobi preconditioner for momentum, CG preconditioned by a recent factorization for the
