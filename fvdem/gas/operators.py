@@ -21,6 +21,17 @@ import scipy.sparse as sp
 from .mesh import GasMesh
 
 
+def _csr_pattern(rows, cols, n):
+    """CSR structure ``(indptr, indices)`` of the n x n pattern holding entries ``(rows, cols)`` and
+    each entry's position in its data array (repeated entries share a position)."""
+    pattern = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    pattern.sum_duplicates()
+    pattern.sort_indices()
+    lookup = sp.csr_matrix((np.arange(1, pattern.nnz + 1), pattern.indices, pattern.indptr), shape=(n, n))
+    position = np.asarray(lookup[rows, cols]).ravel() - 1
+    return pattern.indptr, pattern.indices, position
+
+
 class DiffusionOperator:
     """Face-coefficient diffusion on a ``GasMesh`` with optional Dirichlet boundary faces."""
 
@@ -39,14 +50,8 @@ class DiffusionOperator:
         cols = np.concatenate([p, q, q, p, pb])
         faces = np.concatenate([interior, interior, interior, interior, dirichlet])
         signs = np.concatenate([-np.ones(2 * len(interior)), np.ones(2 * len(interior)), -np.ones(len(dirichlet))])
-        pattern = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-        pattern.sum_duplicates()
-        pattern.sort_indices()
-        self._indptr, self._indices = pattern.indptr, pattern.indices
-        # position of each entry in the CSR data array
-        lookup = sp.csr_matrix((np.arange(1, pattern.nnz + 1), pattern.indices, pattern.indptr), shape=(n, n))
-        position = np.asarray(lookup[rows, cols]).ravel() - 1
-        self._scatter = sp.csr_matrix((signs, (position, faces)), shape=(pattern.nnz, mesh.face_count))
+        self._indptr, self._indices, position = _csr_pattern(rows, cols, n)
+        self._scatter = sp.csr_matrix((signs, (position, faces)), shape=(len(self._indices), mesh.face_count))
         self._geometry = mesh.face_areas / mesh.face_distances
         self._rhs_scatter = sp.csr_matrix((-np.ones(len(dirichlet)), (pb, dirichlet)), shape=(n, mesh.face_count))
 
@@ -89,23 +94,19 @@ class UpwindConvectionOperator:
         # entries: (P,P,+F+), (P,N,+F-), (N,N,-F-), (N,P,-F+), outflow (P,P,+F)
         rows = np.concatenate([p, p, q, q, po])
         cols = np.concatenate([p, q, q, p, po])
-        pattern = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-        pattern.sum_duplicates()
-        pattern.sort_indices()
-        self._indptr, self._indices = pattern.indptr, pattern.indices
-        lookup = sp.csr_matrix((np.arange(1, pattern.nnz + 1), pattern.indices, pattern.indptr), shape=(n, n))
-        position = np.asarray(lookup[rows, cols]).ravel() - 1
+        self._indptr, self._indices, position = _csr_pattern(rows, cols, n)
+        nnz = len(self._indices)
         m = len(interior)
         k = len(self.outflow_faces)
         f_all = mesh.face_count
         self._scatter_plus = sp.csr_matrix(
             (np.concatenate([np.ones(m), -np.ones(m), np.ones(k)]),
              (np.concatenate([position[:m], position[3 * m:4 * m], position[4 * m:]]),
-              np.concatenate([interior, interior, self.outflow_faces]))), shape=(pattern.nnz, f_all))
+              np.concatenate([interior, interior, self.outflow_faces]))), shape=(nnz, f_all))
         self._scatter_minus = sp.csr_matrix(
             (np.concatenate([np.ones(m), -np.ones(m), np.ones(k)]),
              (np.concatenate([position[m:2 * m], position[2 * m:3 * m], position[4 * m:]]),
-              np.concatenate([interior, interior, self.outflow_faces]))), shape=(pattern.nnz, f_all))
+              np.concatenate([interior, interior, self.outflow_faces]))), shape=(nnz, f_all))
         pi = mesh.face_cells[self.inflow_faces, 0]
         self._rhs_scatter = sp.csr_matrix((-np.ones(len(pi)), (pi, self.inflow_faces)), shape=(n, f_all))
 
