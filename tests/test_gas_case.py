@@ -58,3 +58,22 @@ def test_periodic_gas_box_accelerates_under_its_body_force():
     u = sim.gas.solver.velocity
     np.testing.assert_allclose(u[:, 2], (1.2 / 1.2 - 9.81) * 0.01, rtol=1e-9)
     assert np.abs(u[:, :2]).max() < 1e-12
+
+
+def test_particles_and_gas_in_one_case_write_both_and_step_in_ratio(tmp_path):
+    """Particles and gas together (not yet coupled: issue 4): a gas step every cfd/dem DEM steps, and
+    particle and gas snapshots side by side."""
+    from fvdem.case import case_from_dict
+    case = case_from_dict({
+        "domain": {"upper": [0.06, 0.06, 0.15]},
+        "particles": {"count": 60, "insertion": {"upper": [0.06, 0.06, 0.1]}},
+        "gas": {"enabled": True, "cells": [4, 4, 10], "inlet_velocity": 0.2, "cfd_step": 1e-4},
+        "time": {"end": 0.002},
+        "output": {"progress": False, "snapshot_interval": 0.001, "timeseries_interval": 0.0005,
+                   "checkpoint_interval": 0.001}})
+    sim = fvdem.Simulation(case, tmp_path / "out")
+    sim.run()
+    assert sim.step_count == 200 and sim.gas.step_count == 20
+    assert (tmp_path / "out" / "particles.pvd").exists() and (tmp_path / "out" / "gas.pvd").exists()
+    inflow = -sim.gas.solver.face_flux[sim.gas.mesh.boundary_faces["z-"]].sum()
+    assert inflow == pytest.approx(0.2 * 0.06 ** 2, rel=1e-12)
