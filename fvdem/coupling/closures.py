@@ -1,0 +1,149 @@
+"""Hydrodynamic closures of seed 000 (MODEL.md §3, Table 1) as pure functions.
+
+Each function takes local, per-particle quantities as numpy arrays (or floats) and returns forces,
+coefficients or directions; none keeps state. Notation: ``u`` the slip velocity (gas interstitial
+velocity minus particle velocity) [m/s], ``eps`` the local voidage, ``d_p`` the volume-equivalent
+diameter [m], ``rho`` and ``mu`` the gas density [kg/m^3] and viscosity [Pa s], ``axis`` the unit
+particle axis, ``theta`` / ``phi`` the angle between axis and slip [rad].
+
+Choices on the points MODEL.md flags as ambiguous (each pinned by a test in
+tests/test_closures.py):
+
+- Particle Reynolds number: the *superficial* slip, ``Re = rho d_p eps |u| / mu`` (Di Felice 1994,
+  CFDEMcoupling; Sanjeevi & Padding normalise by the superficial velocity too).
+- Crosswise and lengthwise sphericities: ``A_perp = (pi/4) d^2 + d L_rod sin(theta)`` and
+  ``Phi_par = A_e / (A_p/2 - A_par)``; the extracted forms fail the sphere limit Phi = 1.
+- Sanjeevi-Padding Eq. 17: the isolated drag enters as the product ``F_isol (1 - eps_s)^2``, which
+  recovers the isolated particle at eps_s -> 0; Eq. 15 is normalised by the Stokes drag on the
+  superficial slip, ``F_D = 3 pi mu d_p eps u F``.
+- Table 2 lists e = f = 11.12 at 90 degrees; used as extracted.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+# --------------------------------------------------------------------------- shape
+def spherocylinder_shape(diameter, length):
+    """Volume-equivalent diameter [m], volume [m^3] and surface [m^2] of a spherocylinder of cylinder
+    ``diameter`` and total ``length`` (caps included; ``length == diameter`` is a sphere)."""
+    rod = np.asarray(length, float) - diameter
+    volume = np.pi / 4 * diameter ** 2 * rod + np.pi / 6 * diameter ** 3
+    surface = np.pi * diameter * rod + np.pi * diameter ** 2
+    return (6 * volume / np.pi) ** (1 / 3), volume, surface
+
+
+def sphericities(diameter, length, theta):
+    """Sphericity, crosswise and lengthwise sphericity (Hoelzer & Sommerfeld 2008; seed 000 Eqs. 12-14)
+    of a spherocylinder at angle ``theta`` [rad] between its axis and the slip velocity.
+
+    ``Phi = pi^(1/3) (6 V)^(2/3) / A_p``; ``Phi_perp = A_e / ((pi/4) d^2 + d L_rod sin theta)``;
+    ``Phi_par = A_e / (A_p / 2 - ((pi/4) d^2 + d L_rod cos theta))``, ``A_e = (pi/4) d_p^2``.
+    All three are 1 for a sphere.
+    """
+    d_p, volume, surface = spherocylinder_shape(diameter, length)
+    rod = np.asarray(length, float) - diameter
+    a_e = np.pi / 4 * d_p ** 2
+    phi = np.pi ** (1 / 3) * (6 * volume) ** (2 / 3) / surface
+    crosswise = a_e / (np.pi / 4 * diameter ** 2 + diameter * rod * np.abs(np.sin(theta)))
+    lengthwise = a_e / (surface / 2 - (np.pi / 4 * diameter ** 2 + diameter * rod * np.abs(np.cos(theta))))
+    return phi, crosswise, lengthwise
+
+
+# --------------------------------------------------------------------------- single-particle drag
+def hoelzer_sommerfeld_cd(reynolds, phi, crosswise, lengthwise):
+    """Drag coefficient of an isolated non-spherical particle (Hoelzer & Sommerfeld 2008; Eq. 11):
+    ``8/(Re sqrt(Phi_par)) + 16/(Re sqrt(Phi)) + 3/(sqrt(Re) Phi^(3/4)) + 0.42 10^(0.4 (-log Phi)^0.2) / Phi_perp``.
+    For a sphere: 24/Re + 3/sqrt(Re) + 0.42. Valid for Re up to ~1e5 and 0.09 < Phi <= 1."""
+    re = np.asarray(reynolds, float)
+    return (8.0 / (re * np.sqrt(lengthwise)) + 16.0 / (re * np.sqrt(phi)) + 3.0 / (np.sqrt(re) * phi ** 0.75)
+            + 0.42 * 10.0 ** (0.4 * (-np.log10(phi)) ** 0.2) / crosswise)
+
+
+def di_felice_exponent(reynolds):
+    """Voidage exponent of Di Felice (1994): ``chi = 3.7 - 0.65 exp(-(1.5 - log10 Re)^2 / 2)`` (Eq. 10)."""
+    return 3.7 - 0.65 * np.exp(-(1.5 - np.log10(reynolds)) ** 2 / 2.0)
+
+
+def slip_reynolds(slip_speed, voidage, d_p, rho, mu):
+    """Particle Reynolds number on the superficial slip: ``rho d_p eps |u| / mu`` (flagged choice)."""
+    return rho * d_p * voidage * slip_speed / mu
+
+
+def single_particle_drag(slip, voidage, d_p, rho, mu, phi=1.0, crosswise=1.0, lengthwise=1.0):
+    """Drag force [N] (N, 3): Hoelzer-Sommerfeld with Di Felice's voidage function (Eq. 9):
+    ``F = 1/2 C_D rho eps^(2 - chi) (pi/4) d_p^2 |u| u`` with C_D and chi at the superficial Re.
+    Spheres: ``phi = crosswise = lengthwise = 1``."""
+    slip = np.atleast_2d(slip)
+    speed = np.linalg.norm(slip, axis=1)
+    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    cd = hoelzer_sommerfeld_cd(re, phi, crosswise, lengthwise)
+    factor = 0.5 * cd * rho * voidage ** (2.0 - di_felice_exponent(re)) * np.pi / 4 * d_p ** 2 * speed
+    return factor[:, None] * slip
+
+
+# --------------------------------------------------------------------------- multi-particle (Sanjeevi & Padding 2020)
+SANJEEVI_PADDING_DRAG = {  # Table 2: (phi = 0 deg, phi = 90 deg)
+    "a": (2.0, 3.0), "b": (11.3, 17.2), "c": (0.69, 0.79), "d": (0.77, 3.0), "e": (0.42, 11.12),
+    "f": (4.84, 11.12), "g": (0.0, 0.57),
+    "a1": (24.48, 31.89), "a2": (3.965, 5.519), "a3": (0.41, 0.229), "a4": (0.0005, 0.0032), "a5": (0.15, 1.089),
+}
+SANJEEVI_PADDING_TORQUE = {"a": 0.82, "b": 1.44, "c": 1.07, "d": 5.48, "e": 0.223}  # Table 4
+
+
+def sanjeevi_padding_drag_at(reynolds, solids, column):
+    """Normalised drag ``F(Re, eps_s)`` at incidence 0 deg (``column = 0``) or 90 deg (``column = 1``)
+    (Eqs. 17-21): ``F_isol (1 - eps_s)^2 + F_eps + F_Re,eps`` with ``F_isol = C_d,isol Re / 24``."""
+    k = {name: values[column] for name, values in SANJEEVI_PADDING_DRAG.items()}
+    re = np.asarray(reynolds, float)
+    es = np.asarray(solids, float)
+    cd_isol = (k["a1"] / re + k["a2"] / re ** k["a3"]) * np.exp(-k["a4"] * re) + k["a5"] * (1 - np.exp(-k["a4"] * re))
+    f_isol = cd_isol * re / 24.0
+    f_eps = k["a"] * np.sqrt(es) / (1 - es) ** 2 + k["b"] * es / (1 - es) ** 2
+    f_re_eps = re ** k["c"] * es ** k["d"] * (k["e"] * (1 - es) + k["f"] * es ** 3 / (1 - es)) + k["g"] * es * (1 - es) ** 2 * re
+    return f_isol * (1 - es) ** 2 + f_eps + f_re_eps
+
+
+def multi_particle_drag(slip, voidage, axis, d_p, rho, mu):
+    """Drag force [N] (N, 3) of Sanjeevi & Padding 2020 (Eqs. 15-16): ``3 pi mu d_p eps F_phi u`` with
+    ``F_phi = F_0 + (F_90 - F_0) sin^2 phi``, phi the angle between axis and slip."""
+    slip = np.atleast_2d(slip)
+    speed = np.linalg.norm(slip, axis=1)
+    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    solids = 1.0 - voidage
+    cos2 = _cos2(axis, slip, speed)
+    f0 = sanjeevi_padding_drag_at(re, solids, 0)
+    f90 = sanjeevi_padding_drag_at(re, solids, 1)
+    f_phi = f0 + (f90 - f0) * (1.0 - cos2)
+    return (3 * np.pi * mu * d_p * voidage * f_phi)[:, None] * slip
+
+
+def _cos2(axis, slip, speed):
+    axis = np.atleast_2d(axis)
+    c = np.einsum("ij,ij->i", axis, slip) / np.maximum(speed, 1e-300)
+    return np.clip(c * c, 0.0, 1.0)
+
+
+# --------------------------------------------------------------------------- lift and torque directions
+def lift_direction(axis, slip):
+    """Unit lift direction (Eq. 23): ``sign(a.u) ((a x u) x u) / |(a x u) x u|``; zero where the axis is
+    parallel or perpendicular to the slip. Unchanged when the axis is reversed."""
+    axis, slip = np.atleast_2d(axis), np.atleast_2d(slip)
+    au = np.einsum("ij,ij->i", axis, slip)
+    v = np.cross(np.cross(axis, slip), slip)
+    norm = np.linalg.norm(v, axis=1)
+    out = np.zeros_like(v)
+    ok = (norm > 1e-300) & (au != 0)
+    out[ok] = np.sign(au[ok])[:, None] * v[ok] / norm[ok, None]
+    return out
+
+
+def torque_direction(axis, slip):
+    """Unit torque direction (Eq. 28): ``sign(u.a) (u x a) / |u x a|``; unchanged when the axis is reversed."""
+    axis, slip = np.atleast_2d(axis), np.atleast_2d(slip)
+    ua = np.einsum("ij,ij->i", slip, axis)
+    v = np.cross(slip, axis)
+    norm = np.linalg.norm(v, axis=1)
+    out = np.zeros_like(v)
+    ok = (norm > 1e-300) & (ua != 0)
+    out[ok] = np.sign(ua[ok])[:, None] * v[ok] / norm[ok, None]
+    return out

@@ -1,0 +1,86 @@
+"""Closures: limits that pin every flagged point of MODEL.md §3."""
+import numpy as np
+import pytest
+
+from fvdem.coupling.closures import (SANJEEVI_PADDING_DRAG, di_felice_exponent, hoelzer_sommerfeld_cd, lift_direction,
+                                     multi_particle_drag, sanjeevi_padding_drag_at, single_particle_drag,
+                                     sphericities, spherocylinder_shape, torque_direction)
+
+RHO, MU, D = 1.2, 1.568e-5, 5.3e-3
+
+
+def test_sphericities_are_one_for_a_sphere_at_any_angle():
+    for theta in np.linspace(0, np.pi / 2, 7):
+        phi, crosswise, lengthwise = sphericities(3e-3, 3e-3, theta)
+        assert (phi, crosswise, lengthwise) == pytest.approx((1.0, 1.0, 1.0), rel=1e-12)
+
+
+def test_ar4_sphericity_matches_the_equal_volume_sphere_surface_ratio():
+    d_p, volume, surface = spherocylinder_shape(3e-3, 12e-3)
+    assert d_p == pytest.approx(5.3e-3, rel=2e-3)
+    phi, _, _ = sphericities(3e-3, 12e-3, 0.3)
+    assert phi == pytest.approx(np.pi * d_p ** 2 / surface, rel=1e-12)  # definition: A_sphere(V) / A_p
+    # broadside the projected area is largest: crosswise sphericity smallest at 90 degrees
+    assert sphericities(3e-3, 12e-3, np.pi / 2)[1] < sphericities(3e-3, 12e-3, 0.0)[1]
+
+
+def test_hoelzer_sommerfeld_sphere_limit_and_stokes_drag():
+    re = np.array([1e-3, 1.0, 100.0])
+    np.testing.assert_allclose(hoelzer_sommerfeld_cd(re, 1.0, 1.0, 1.0), 24 / re + 3 / np.sqrt(re) + 0.42)
+    # isolated sphere (eps = 1) at vanishing Re: Stokes drag 3 pi mu d u
+    u = np.array([[0.0, 0.0, 1e-6]])
+    force = single_particle_drag(u, 1.0, D, RHO, MU)
+    assert force[0, 2] == pytest.approx(3 * np.pi * MU * D * 1e-6, rel=2e-3)
+
+
+def test_di_felice_exponent_and_isolated_limit():
+    assert di_felice_exponent(10 ** 1.5) == pytest.approx(3.05)
+    assert di_felice_exponent(1e-6) == pytest.approx(3.7, abs=1e-3)
+    u = np.array([[0.0, 0.0, 0.5]])
+    # the voidage function multiplies the isolated drag by eps^(2 - chi) at the superficial Re
+    dense = single_particle_drag(u, 0.5, D, RHO, MU)[0, 2]
+    re = RHO * D * 0.5 * 0.5 / MU
+    cd = hoelzer_sommerfeld_cd(re, 1.0, 1.0, 1.0)
+    expected = 0.5 * cd * RHO * 0.5 ** (2 - di_felice_exponent(re)) * np.pi / 4 * D ** 2 * 0.25
+    assert dense == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("column", [0, 1])
+def test_sanjeevi_padding_dilute_limit_is_the_isolated_particle(column):
+    re = np.array([0.5, 10.0, 200.0])
+    dilute = sanjeevi_padding_drag_at(re, 0.0, column)
+    a1, a2, a3, a4, a5 = (SANJEEVI_PADDING_DRAG[f"a{k}"][column] for k in range(1, 6))
+    cd = (a1 / re + a2 / re ** a3) * np.exp(-a4 * re) + a5 * (1 - np.exp(-a4 * re))
+    np.testing.assert_allclose(dilute, cd * re / 24, rtol=1e-12)
+    # denser beds drag more
+    assert np.all(sanjeevi_padding_drag_at(re, 0.4, column) > dilute)
+
+
+def test_multi_particle_drag_interpolates_in_sin_squared_and_is_along_the_slip():
+    u = np.array([[0.0, 0.0, 0.8]])
+    axes = {0: [[0, 0, 1.0]], 90: [[1.0, 0, 0]], 45: [[np.sqrt(0.5), 0, np.sqrt(0.5)]]}
+    f = {k: multi_particle_drag(u, 0.6, np.array(a), D, RHO, MU)[0] for k, a in axes.items()}
+    for k in f:
+        assert np.abs(f[k][:2]).max() < 1e-18  # drag is along the slip
+    assert f[45][2] == pytest.approx(0.5 * (f[0][2] + f[90][2]), rel=1e-12)
+
+
+def test_lift_and_torque_directions():
+    rng = np.random.default_rng(0)
+    axis = rng.normal(size=(50, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    slip = rng.normal(size=(50, 3))
+    lift = lift_direction(axis, slip)
+    torque = torque_direction(axis, slip)
+    np.testing.assert_allclose(np.einsum("ij,ij->i", lift, slip), 0.0, atol=1e-12)   # perpendicular to slip
+    np.testing.assert_allclose(np.einsum("ij,ij->i", torque, axis), 0.0, atol=1e-12)  # perpendicular to axis
+    np.testing.assert_allclose(np.linalg.norm(lift, axis=1), 1.0)
+    np.testing.assert_allclose(lift_direction(-axis, slip), lift)     # a reversed axis is the same particle
+    np.testing.assert_allclose(torque_direction(-axis, slip), torque)
+    # zero at 0 and 90 degrees of incidence
+    u = np.array([[0.0, 0.0, 1.0]])
+    assert not lift_direction(np.array([[0, 0, 1.0]]), u).any() and not lift_direction(np.array([[1.0, 0, 0]]), u).any()
+    assert not torque_direction(np.array([[0, 0, 1.0]]), u).any() and not torque_direction(np.array([[1.0, 0, 0]]), u).any()
+    # a rod tilted from the flow is lifted towards the side its leading end points to, in the plane of axis and slip
+    tilted = lift_direction(np.array([[np.sin(0.3), 0, np.cos(0.3)]]), u)[0]
+    assert tilted[1] == 0.0 and tilted[0] != 0.0
