@@ -84,3 +84,38 @@ def test_lift_and_torque_directions():
     # a rod tilted from the flow is lifted towards the side its leading end points to, in the plane of axis and slip
     tilted = lift_direction(np.array([[np.sin(0.3), 0, np.cos(0.3)]]), u)[0]
     assert tilted[1] == 0.0 and tilted[0] != 0.0
+
+
+from fvdem.coupling.closures import (multi_particle_lift, multi_particle_torque, single_particle_lift,  # noqa: E402
+                                     single_particle_torque)
+
+AXES = {0: [0, 0, 1.0], 45: [np.sqrt(0.5), 0, np.sqrt(0.5)], 90: [1.0, 0, 0]}
+
+
+@pytest.mark.parametrize("closure", [single_particle_lift, single_particle_torque, multi_particle_lift,
+                                     multi_particle_torque])
+def test_lift_and_torque_vanish_at_zero_and_ninety_degrees(closure):
+    u = np.array([[0.0, 0.0, 1.5]])
+    for angle in (0, 90):
+        assert np.abs(closure(u, 0.6, np.array([AXES[angle]]), D, RHO, MU)).max() < 1e-18
+    assert np.abs(closure(u, 0.6, np.array([AXES[45]]), D, RHO, MU)).max() > 0
+
+
+def test_multi_particle_torque_equals_single_particle_torque_in_the_dilute_limit_at_45_degrees():
+    """Pins the choice of T_p,isol: at eps_s -> 0 and 45 degrees Eq. 30 reproduces Eq. 27."""
+    for speed in (0.05, 0.5, 3.0):
+        u = np.array([[0.0, 0.0, speed]])
+        mp = multi_particle_torque(u, 1.0, np.array([AXES[45]]), D, RHO, MU)
+        sp = single_particle_torque(u, 1.0, np.array([AXES[45]]), D, RHO, MU)
+        np.testing.assert_allclose(mp, sp, rtol=1e-10, atol=1e-30)
+
+
+def test_multi_particle_lift_agrees_with_single_particle_lift_in_order_of_magnitude_when_dilute():
+    for speed in (0.5, 3.0):
+        u = np.array([[0.0, 0.0, speed]])
+        mp = multi_particle_lift(u, 1.0 - 1e-9, np.array([AXES[45]]), D, RHO, MU)[0]
+        sp = single_particle_lift(u, 1.0 - 1e-9, np.array([AXES[45]]), D, RHO, MU)[0]
+        assert np.dot(mp, sp) > 0  # same direction
+        ratio = np.linalg.norm(mp) / np.linalg.norm(sp)
+        print(f"\nlift MP/SP at 45 deg, eps -> 1, |u| = {speed}: {ratio:.3f}")
+        assert 0.2 < ratio < 5.0
