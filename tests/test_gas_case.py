@@ -30,6 +30,10 @@ def test_fixed_bed_case_reproduces_ergun_and_writes_gas_vtu(tmp_path):
     superficial = grid.cell_data["superficial_velocity"][0][:, 2]
     assert np.median(superficial) == pytest.approx(1.0, rel=1e-3)
     assert not (out / "final_state.npz").exists()  # no particles in this case
+    report = subprocess.run([sys.executable, "-m", "fvdem.cli", "report", str(out)], capture_output=True, text=True,
+                            timeout=300)
+    assert report.returncode == 0, report.stderr
+    assert (out / "timeseries.png").exists() and (out / "gas_profile.png").exists()
 
 
 def test_gas_case_resumes_bit_for_bit(tmp_path):

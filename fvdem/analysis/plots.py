@@ -21,26 +21,61 @@ def read_timeseries(out) -> dict:
     return {name: data[:, k] for k, name in enumerate(header)}
 
 
+LOG_SCALE = {"kinetic_energy", "max_overlap_over_diameter"}
+LABELS = {"kinetic_energy": "kinetic energy [J]", "bed_top": "bed top [m]",
+          "contacts_per_particle": "contacts per particle", "max_overlap_over_diameter": "max overlap / diameter",
+          "rms_speed": "RMS particle speed [m/s]", "max_speed": "max particle speed [m/s]",
+          "gas_max_speed": "max gas speed [m/s]", "gas_inlet_pressure": "inlet pressure [Pa]",
+          "porous_zone_pressure_gradient": "porous-zone -dp/dz [Pa/m]"}
+
+
 def plot_timeseries(out) -> Path:
-    """Kinetic energy, bed top, contacts per particle and max overlap against time."""
+    """Every recorded diagnostic against time (whatever the run's phases wrote)."""
     plt = _pyplot()
     ts = read_timeseries(out)
-    fig, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
-    panels = [("kinetic_energy", "kinetic energy [J]", True), ("bed_top", "bed top [m]", False),
-              ("contacts_per_particle", "contacts per particle", False),
-              ("max_overlap_over_diameter", "max overlap / diameter", True)]
-    for ax, (key, label, log) in zip(axes.flat, panels):
-        values = ts[key]
-        if log:
-            ax.semilogy(ts["time"], np.maximum(values, 1e-30))
+    keys = [k for k in ts if k != "time"][:8]
+    rows = (len(keys) + 1) // 2
+    fig, axes = plt.subplots(rows, 2, figsize=(9, 2.6 * rows), sharex=True, squeeze=False)
+    for ax, key in zip(axes.flat, keys):
+        if key in LOG_SCALE:
+            ax.semilogy(ts["time"], np.maximum(ts[key], 1e-30))
         else:
-            ax.plot(ts["time"], values)
-        ax.set_ylabel(label)
+            ax.plot(ts["time"], ts[key])
+        ax.set_ylabel(LABELS.get(key, key))
         ax.grid(alpha=0.3)
-    for ax in axes[1]:
+    for ax in list(axes.flat)[len(keys):]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     fig.tight_layout()
     path = Path(out) / "timeseries.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_gas_profile(out) -> Path:
+    """Layer-averaged pressure and voidage against height from the last gas snapshot."""
+    import meshio
+    plt = _pyplot()
+    last = sorted(Path(out).glob("gas_*.vtu"))[-1]
+    grid = meshio.read(last)
+    centres = grid.points[grid.cells[0].data].mean(axis=1)
+    z = np.round(centres[:, 2], 9)
+    layers = np.unique(z)
+    pressure = np.array([grid.cell_data["pressure"][0][z == h].mean() for h in layers])
+    voidage = np.array([grid.cell_data["voidage"][0][z == h].mean() for h in layers])
+    fig, (left, right) = plt.subplots(1, 2, figsize=(8, 5), sharey=True)
+    left.plot(pressure, layers)
+    left.set_xlabel("pressure [Pa]")
+    left.set_ylabel("z [m]")
+    right.plot(voidage, layers)
+    right.set_xlabel("voidage")
+    for ax in (left, right):
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"gas, {last.name}")
+    fig.tight_layout()
+    path = Path(out) / "gas_profile.png"
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
@@ -77,5 +112,11 @@ def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path
 
 
 def report(out) -> list:
-    """All plots for a run folder; returns the written paths."""
-    return [plot_timeseries(out), plot_colour_slice(out)]
+    """All plots a run folder supports; returns the written paths."""
+    out = Path(out)
+    paths = [plot_timeseries(out)]
+    if (out / "final_state.npz").exists():
+        paths.append(plot_colour_slice(out))
+    if any(out.glob("gas_*.vtu")):
+        paths.append(plot_gas_profile(out))
+    return paths
