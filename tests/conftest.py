@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from fvdem.dem.particles import ParticleArrays, quaternion_from_axis, axis_from_quaternion
+from fvdem.dem.particles import ParticleArrays
 from fvdem.dem.system import Box, ContactModel, DEMSystem
 
 SPHERE_D = 5.3e-3

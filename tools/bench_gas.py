@@ -46,7 +46,6 @@ def bed_fields(mesh, t):
 
 def run(solver, mesh, steps, start=0):
     timings = []
-    assembly = 0.0
     for k in range(start, start + steps):
         voidage, beta = bed_fields(mesh, k * DT)
         solver.voidage_old[:] = solver.voidage

@@ -15,7 +15,7 @@ from numba import njit
 def trilinear(field, points, first_centre, spacing, shape, periodic, out):
     """Interpolate ``field`` (C, k) given in FiPy cell order (x fastest) to ``points`` (N, 3) into
     ``out`` (N, k)."""
-    nx, ny, nz = shape[0], shape[1], shape[2]
+    nx, ny = shape[0], shape[1]
     k = field.shape[1]
     for p in range(points.shape[0]):
         lo = np.empty(3, np.int64)

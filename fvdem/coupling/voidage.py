@@ -25,7 +25,6 @@ def deposit_solid_volume(position, axis, radius, half_length, volume, lower, spa
                          solid):
     """Add each particle's volume [m^3] to ``solid`` (flat, FiPy cell order), over ``satellites``
     points along its axis (1 for spheres or for the centroid method)."""
-    nx, ny, nz = shape[0], shape[1], shape[2]
     for i in range(position.shape[0]):
         points = satellites if half_length[i] > 0.0 else 1
         extent = half_length[i] + radius[i]
