@@ -14,6 +14,15 @@ def _pyplot():
     return plt
 
 
+def _save(fig, path) -> Path:
+    """Lay out, write as PNG and close a figure."""
+    plt = _pyplot()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 def read_timeseries(out) -> dict:
     with open(Path(out) / "timeseries.csv", newline="") as fh:
         rows = list(csv.reader(fh))
@@ -47,11 +56,7 @@ def plot_timeseries(out) -> Path:
         ax.set_visible(False)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    fig.tight_layout()
-    path = Path(out) / "timeseries.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, Path(out) / "timeseries.png")
 
 
 def plot_gas_profile(out) -> Path:
@@ -74,11 +79,7 @@ def plot_gas_profile(out) -> Path:
     for ax in (left, right):
         ax.grid(alpha=0.3)
     fig.suptitle(f"gas, {last.name}")
-    fig.tight_layout()
-    path = Path(out) / "gas_profile.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, Path(out) / "gas_profile.png")
 
 
 def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path:
@@ -104,11 +105,7 @@ def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path
     ax.set_ylabel("z [m]")
     ax.set_ylim(0, max(0.05, float((pos[:, 2]).max()) * 1.1))
     ax.set_title(f"colours in a {slab * 1e3:.0f} mm slab at mid-depth")
-    fig.tight_layout()
-    path = Path(out) / "colours.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, Path(out) / "colours.png")
 
 
 def report(out) -> list:

@@ -69,13 +69,19 @@ def slip_reynolds(slip_speed, voidage, d_p, rho, mu):
     return rho * d_p * voidage * slip_speed / mu
 
 
+def _slip_state(slip, voidage, d_p, rho, mu):
+    """Slip vectors (N, 3), their magnitudes and the slip Reynolds numbers (floored at 1e-12 so that
+    a particle at rest in the gas gives finite coefficients and zero force)."""
+    slip = np.atleast_2d(slip)
+    speed = np.linalg.norm(slip, axis=1)
+    return slip, speed, np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+
+
 def single_particle_drag(slip, voidage, d_p, rho, mu, phi=1.0, crosswise=1.0, lengthwise=1.0):
     """Drag force [N] (N, 3): Hoelzer-Sommerfeld with Di Felice's voidage function (Eq. 9):
     ``F = 1/2 C_D rho eps^(2 - chi) (pi/4) d_p^2 |u| u`` with C_D and chi at the superficial Re.
     Spheres: ``phi = crosswise = lengthwise = 1``."""
-    slip = np.atleast_2d(slip)
-    speed = np.linalg.norm(slip, axis=1)
-    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     cd = hoelzer_sommerfeld_cd(re, phi, crosswise, lengthwise)
     factor = 0.5 * cd * rho * voidage ** (2.0 - di_felice_exponent(re)) * np.pi / 4 * d_p ** 2 * speed
     return factor[:, None] * slip
@@ -106,9 +112,7 @@ def sanjeevi_padding_drag_at(reynolds, solids, column):
 def multi_particle_drag(slip, voidage, axis, d_p, rho, mu):
     """Drag force [N] (N, 3) of Sanjeevi & Padding 2020 (Eqs. 15-16): ``3 pi mu d_p eps F_phi u`` with
     ``F_phi = F_0 + (F_90 - F_0) sin^2 phi``, phi the angle between axis and slip."""
-    slip = np.atleast_2d(slip)
-    speed = np.linalg.norm(slip, axis=1)
-    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     solids = 1.0 - voidage
     cos2 = _cos2(axis, slip, speed)
     f0 = sanjeevi_padding_drag_at(re, solids, 0)
@@ -171,18 +175,14 @@ def zastawny_coefficient(reynolds, alpha, k):
 
 def single_particle_lift(slip, voidage, axis, d_p, rho, mu):
     """Lift force [N] (Eqs. 22-24): ``1/2 C_L rho (pi/4) d_p^2 |u|^2`` along ``lift_direction``."""
-    slip = np.atleast_2d(slip)
-    speed = np.linalg.norm(slip, axis=1)
-    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     cl = zastawny_coefficient(re, incidence_angle(axis, slip), ZASTAWNY_LIFT)
     return (0.5 * cl * rho * np.pi / 4 * d_p ** 2 * speed ** 2)[:, None] * lift_direction(axis, slip)
 
 
 def single_particle_torque(slip, voidage, axis, d_p, rho, mu):
     """Hydrodynamic torque [N m] (Eqs. 27-29): ``1/2 C_T rho (pi/8) d_p^3 |u|^2`` along ``torque_direction``."""
-    slip = np.atleast_2d(slip)
-    speed = np.linalg.norm(slip, axis=1)
-    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     ct = zastawny_coefficient(re, incidence_angle(axis, slip), ZASTAWNY_TORQUE)
     return (0.5 * ct * rho * np.pi / 8 * d_p ** 3 * speed ** 2)[:, None] * torque_direction(axis, slip)
 
@@ -191,9 +191,7 @@ def multi_particle_lift(slip, voidage, axis, d_p, rho, mu):
     """Lift force [N] of Sanjeevi & Padding 2020 (Eqs. 25-26): ``F_L,phi = (F_90 - F_0) sin phi cos phi``,
     ``F_L = 3 pi mu d_p eps |u| F_L,phi`` along ``lift_direction`` (normalised like the drag, on the
     superficial slip; the extracted Eq. 26 shows no eps: identical at eps -> 1)."""
-    slip = np.atleast_2d(slip)
-    speed = np.linalg.norm(slip, axis=1)
-    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     solids = 1.0 - voidage
     phi = incidence_angle(axis, slip)
     f_l = (sanjeevi_padding_drag_at(re, solids, 1) - sanjeevi_padding_drag_at(re, solids, 0)) * np.sin(phi) * np.cos(phi)
@@ -211,9 +209,7 @@ def multi_particle_torque(slip, voidage, axis, d_p, rho, mu):
     """Torque [N m] of Sanjeevi & Padding 2020 (Eqs. 30-33, Table 4):
     ``T = 2 pi mu d_p^2 eps |u| T_P,phi``, ``T_P,phi = T_P,mag sin phi cos phi``,
     ``T_P,mag = T_p,isol (1 - eps_s)^2 + Re^a eps_s^b [c (1 - eps_s) + d eps_s^3/(1 - eps_s)] + e eps_s (1 - eps_s)^2 Re``."""
-    slip = np.atleast_2d(slip)
-    speed = np.linalg.norm(slip, axis=1)
-    re = np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
+    slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     es = 1.0 - np.asarray(voidage, float)
     k = SANJEEVI_PADDING_TORQUE
     t_mag = (isolated_torque_magnitude(re) * (1 - es) ** 2

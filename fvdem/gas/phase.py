@@ -52,10 +52,15 @@ class GasPhase:
         return info
 
     # ------------------------------------------------------------------ observables
+    def layer_height(self, height: float) -> float:
+        """Height [m] of the cell-centre layer nearest to ``height``."""
+        z = self.mesh.cell_centers[:, 2]
+        return float(z[np.argmin(np.abs(z - height))])
+
     def plane_pressure(self, height: float) -> float:
         """Mean pressure [Pa] of the cell layer nearest to ``height`` [m]."""
         z = self.mesh.cell_centers[:, 2]
-        layer = np.abs(z - z[np.argmin(np.abs(z - height))]) < 1e-9
+        layer = np.abs(z - self.layer_height(height)) < 1e-9
         return float(self.solver.pressure[layer].mean())
 
     def diagnostics(self) -> dict:
@@ -67,9 +72,8 @@ class GasPhase:
             lo, hi = z.lower[2], z.upper[2]
             inset = 0.25 * (hi - lo)
             a, b = lo + inset, hi - inset
-            diag["porous_zone_pressure_gradient"] = (self.plane_pressure(a) - self.plane_pressure(b)) / (
-                self.mesh.cell_centers[np.argmin(np.abs(self.mesh.cell_centers[:, 2] - b)), 2]
-                - self.mesh.cell_centers[np.argmin(np.abs(self.mesh.cell_centers[:, 2] - a)), 2])
+            diag["porous_zone_pressure_gradient"] = ((self.plane_pressure(a) - self.plane_pressure(b))
+                                                     / (self.layer_height(b) - self.layer_height(a)))
             u = self.config.inlet_velocity
             solids = 1.0 - z.voidage
             diag["ergun_pressure_gradient"] = (150 * solids ** 2 * self.config.viscosity * u
