@@ -87,11 +87,19 @@ class ParticlesConfig:
     initial_state: str | None = spec(None, kind="str", optional=True,
                                      doc="start from a saved state (.npz written by a run), path relative "
                                          "to the case file; insertion is then skipped")
+    fixed: bool = spec(False, kind="bool",
+                       doc="hold the particles in place (a fixed bed): no motion or contacts are computed; "
+                           "the gas still flows through them and feels their drag")
     insertion: InsertionConfig = section(InsertionConfig)
 
     @property
     def radius(self) -> float:
         return 0.5 * self.diameter
+
+    @property
+    def aspect_ratio(self) -> float:
+        """Total length over diameter (1 for spheres)."""
+        return 1.0 if self.shape == "sphere" else self.length / self.diameter
 
     @property
     def half_length(self) -> float:
@@ -166,6 +174,31 @@ class GasConfig:
 
 
 @dataclass(frozen=True)
+class CouplingConfig:
+    enabled: bool = spec(True, kind="bool", doc="exchange momentum between gas and particles (when both are present)")
+    drag: str = spec("hoelzer-sommerfeld", kind="str", choices=("hoelzer-sommerfeld", "sanjeevi-padding", "none"),
+                     doc="drag closure: Hoelzer-Sommerfeld with Di Felice's voidage function (single-particle, "
+                         "any shape) or Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders)")
+    lift: str = spec("none", kind="str", choices=("none", "zastawny", "sanjeevi-padding"),
+                     doc="lift closure (spherocylinders only): Zastawny form with seed 000's Table 3, or "
+                         "Sanjeevi-Padding 2020")
+    torque: str = spec("none", kind="str", choices=("none", "zastawny", "sanjeevi-padding"),
+                       doc="hydrodynamic torque closure (spherocylinders only), as for lift")
+    pressure_gradient_force: bool = spec(True, kind="bool", doc="apply -V_p grad p to the particles")
+    voidage: str = spec("divided", kind="str", choices=("divided", "centroid", "trilinear"),
+                        doc="voidage mapping: 'divided' (satellite points along the axis, each to its cell), "
+                            "'centroid' (whole particle to the cell of its centre), 'trilinear' (satellite "
+                            "points spread over the 8 nearest cell centres, the transpose of the interpolation)")
+    satellites: int = spec(5, kind="int", ge=1, doc="satellite points along a spherocylinder's axis")
+    minimum_voidage: float = spec(0.2, gt=0.0, lt=1.0, doc="voidage floor; cells below it are reported as over-packed")
+    drag_treatment: str = spec("semi-implicit", kind="str", choices=("semi-implicit", "explicit"),
+                               doc="'semi-implicit': implicit in the gas (through beta) and in each DEM kick, "
+                                   "stable for any step; 'explicit': the drag force at the coupling time held "
+                                   "over the CFD step (unstable beyond 2 particle response times)")
+    two_way: bool = spec(True, kind="bool", doc="feed the particle forces back into the gas (false: one-way coupling)")
+
+
+@dataclass(frozen=True)
 class RunConfig:
     threads: int = spec(0, kind="int", ge=0, doc="numba threads (0: all cores)")
 
@@ -180,6 +213,7 @@ class Case:
     time: TimeConfig = section(TimeConfig)
     output: OutputConfig = section(OutputConfig)
     gas: GasConfig = section(GasConfig)
+    coupling: CouplingConfig = section(CouplingConfig)
     run: RunConfig = section(RunConfig)
     source: str | None = field(default=None, compare=False, metadata=dict(kind="internal"))
 
@@ -322,6 +356,9 @@ def _gas_checks(case: Case, problems: list) -> None:
     g = case.gas
     if case.particles.count == 0 and not g.enabled:
         problems.append("particles.count = 0: a case without particles needs the gas phase (gas.enabled = true)")
+    if case.particles.fixed and not g.enabled:
+        problems.append("particles.fixed = true: fixed particles without the gas phase leave nothing to "
+                        "simulate (set gas.enabled = true)")
     if not g.enabled:
         return
     periodic = case.domain.periodic
@@ -338,6 +375,30 @@ def _gas_checks(case: Case, problems: list) -> None:
     zone = g.porous_zone
     if zone.enabled and (zone.lower is None or zone.upper is None):
         problems.append("gas.porous_zone: lower and upper corners are required when enabled")
+    if zone.enabled and case.particles.count > 0 and case.coupling.enabled:
+        problems.append("gas.porous_zone: a case with coupled particles models its bed with the particles; "
+                        "disable the porous zone or set coupling.enabled = false")
+    if case.particles.count > 0 and case.coupling.enabled:
+        _coupling_checks(case, problems)
+
+
+def _coupling_checks(case: Case, problems: list) -> None:
+    c, p = case.coupling, case.particles
+    for key in ("lift", "torque"):
+        if getattr(c, key) != "none" and p.shape == "sphere":
+            problems.append(f"coupling.{key} = {getattr(c, key)!r}: a sphere has no orientation-dependent "
+                            f"{key}; use coupling.{key} = 'none'")
+    if p.shape == "sphere" or p.length is None:
+        if c.drag == "sanjeevi-padding":
+            problems.append("coupling.drag = 'sanjeevi-padding': fitted for aspect-ratio-4 spherocylinders; "
+                            "spheres use 'hoelzer-sommerfeld'")
+        return
+    aspect = p.length / p.diameter
+    for key in ("drag", "lift", "torque"):
+        name = getattr(c, key)
+        if name in ("sanjeevi-padding", "zastawny") and abs(aspect - 4.0) > 0.2:
+            problems.append(f"coupling.{key} = {name!r}: its coefficients are fitted for aspect ratio 4; the "
+                            f"particles have {aspect:.3g} (use 'hoelzer-sommerfeld' drag and no lift/torque)")
 
 
 def _cross_checks(case: Case, problems: list) -> None:

@@ -20,6 +20,7 @@ import numpy as np
 
 from .analysis.bed import bed_top, packed_bed_summary
 from .case import Case, CaseError, to_toml
+from .coupling.bridge import CouplingBridge
 from .dem.insertion import insert_particles
 from .dem.particles import ParticleArrays
 from .dem.system import Box, ContactModel, DEMSystem, SimulationError
@@ -123,6 +124,7 @@ class _WriterState:
     wall_seconds: float = 0.0
     cpu_seconds: float = 0.0
     settled: bool = False
+    pressure_history: list = field(default_factory=list)  # (time [s], bed pressure drop [Pa]) rows
 
 
 class Simulation:
@@ -143,12 +145,16 @@ class Simulation:
         self.progress = case.output.progress if progress is None else progress
         self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
         self.writers = _WriterState()
-        # the loop counts DEM steps when there are particles, CFD steps in a gas-only case
+        # the loop counts DEM steps in a particle-only or uncoupled case, CFD steps (coupling
+        # intervals) when the gas is on and coupled, or without particles
         has_particles = case.particles.count > 0
-        dt = case.time.dem_step if has_particles else case.gas.cfd_step
+        self.coupled = has_particles and case.gas.enabled and case.coupling.enabled
+        by_cfd_step = self.coupled or not has_particles
+        dt = case.gas.cfd_step if by_cfd_step else case.time.dem_step
         self._dt = dt
         self._cfd_every = max(1, round(case.gas.cfd_step / case.time.dem_step)) if has_particles else 1
         self.gas = GasPhase(case) if case.gas.enabled else None
+        self.bridge = None
         self._timeseries_schedule = _Schedule(max(1, round(case.output.timeseries_interval / dt)))
         self._snapshot_schedule = _Schedule(max(1, round(case.output.snapshot_interval / dt)))
         self._checkpoint_schedule = _Schedule(max(1, round(case.output.checkpoint_interval / dt)))
@@ -163,10 +169,14 @@ class Simulation:
                 self.dem.restore(arrays)
             if self.gas is not None:
                 self.gas.restore(arrays)
+            if self.coupled:
+                self.bridge = CouplingBridge(case, self.dem, self.gas)
             self.writers = _WriterState(**meta["writers"])
             self._timeseries().start(resume_time=self.time)
         else:
             self.dem = build_dem(case, build_particles(case)) if has_particles else None
+            if self.coupled:
+                self.bridge = CouplingBridge(case, self.dem, self.gas)
             if self.out is not None:
                 (self.out / "case.toml").write_text(to_toml(case))
                 self._timeseries().start()
@@ -179,8 +189,10 @@ class Simulation:
 
     @property
     def step_count(self) -> int:
-        """Steps of the loop: DEM steps, or CFD steps in a gas-only case."""
-        return self.dem.step_count if self.dem is not None else self.gas.step_count
+        """Steps of the loop: CFD steps in a coupled or gas-only case, else DEM steps."""
+        if self.coupled or self.dem is None or (self.case.particles.fixed and self.gas is not None):
+            return self.gas.step_count
+        return self.dem.step_count
 
     @property
     def time(self) -> float:
@@ -188,15 +200,22 @@ class Simulation:
 
     @property
     def time_step(self) -> float:
-        """The loop's step [s]: the DEM step, or the CFD step in a gas-only case."""
+        """The loop's step [s]: the CFD step in a coupled or gas-only case, else the DEM step."""
         return self._dt
 
     def _advance(self, steps: int) -> None:
-        """Advance ``steps`` loop steps; with both phases, a gas step every ``cfd_step / dem_step`` DEM
-        steps (the phases are not coupled yet: the coupling bridge is issue 4)."""
-        if self.dem is None:
+        """Advance ``steps`` loop steps: coupling intervals (``CouplingBridge.advance``), gas steps, or
+        DEM steps; uncoupled gas and particles take a gas step every ``cfd_step / dem_step`` DEM steps."""
+        if self.coupled:
+            for _ in range(steps):
+                self.bridge.advance()
+            return
+        if self.dem is None or (self.case.particles.fixed and self.gas is not None):
             for _ in range(steps):
                 self.gas.step()
+            return
+        if self.case.particles.fixed:
+            self.dem.step_count += steps  # nothing moves
             return
         if self.gas is None:
             self.dem.step(steps)
@@ -218,7 +237,17 @@ class Simulation:
         diag.update(self.dem.diagnostics())
         p = self.particles
         diag["bed_top"] = bed_top(p.position, p.axis, p.radius, p.half_length)
+        if self.bridge is not None:
+            diag.update(self.bridge.diagnostics())
+            if "bed_pressure_drop" in diag:
+                diag["pressure_drop_over_weight"] = diag["bed_pressure_drop"] / self.bed_weight_per_area()
         return diag
+
+    def bed_weight_per_area(self) -> float:
+        """Particle weight over the column's cross-section, W/A [Pa] (the fluidized-bed pressure drop)."""
+        lo, hi = np.asarray(self.case.domain.lower), np.asarray(self.case.domain.upper)
+        area = (hi[0] - lo[0]) * (hi[1] - lo[1])
+        return float(self.particles.mass.sum() * np.linalg.norm(self.case.domain.gravity) / area)
 
     # ------------------------------------------------------------------ running
     def request_stop(self, *_):
@@ -273,6 +302,8 @@ class Simulation:
             if self.gas is not None:
                 self.gas.check_health(self.time)
             diag = self.diagnostics()
+            if "pressure_drop_over_weight" in diag and step > 0:
+                self.writers.pressure_history.append((self.time, diag["bed_pressure_drop"]))
             if self.out is not None:
                 self._timeseries().append(diag)
             t = self.case.time
@@ -301,6 +332,12 @@ class Simulation:
             columns += GAS_TIMESERIES_COLUMNS
             if self.gas.zone.any():
                 columns += ("porous_zone_pressure_gradient",)
+            if not self.gas.solver.periodic:
+                columns += ("bed_pressure_drop",)
+        if self.bridge is not None:
+            columns += ("over_packed_cells", "total_drag_z", "total_pressure_force_z")
+            if not self.gas.solver.periodic:
+                columns += ("pressure_drop_over_weight",)
         return TimeseriesWriter(self.out / "timeseries.csv", columns)
 
     # ------------------------------------------------------------------ outputs
@@ -333,12 +370,26 @@ class Simulation:
                                     "wall_contacts", "rms_speed", "max_speed")},
         })
         summary.update(packed_bed_summary(self.particles, self.dem.box))
+        if self.bridge is not None:
+            summary["coupling"] = {"drag": self.bridge.model.drag, "lift": self.bridge.model.lift,
+                                   "torque": self.bridge.model.torque,
+                                   "drag_treatment": self.case.coupling.drag_treatment,
+                                   "voidage": self.case.coupling.voidage}
+            summary["bed_weight_per_area"] = self.bed_weight_per_area()
+            history = np.asarray(self.writers.pressure_history, float).reshape(-1, 2)
+            late = history[history[:, 0] >= 0.5 * self.time] if len(history) else history
+            if len(late):
+                mean = float(late[:, 1].mean())
+                summary.update({"bed_pressure_drop_mean_second_half": mean,
+                                "bed_pressure_drop_std_second_half": float(late[:, 1].std()),
+                                "pressure_drop_over_weight": mean / self.bed_weight_per_area(),
+                                "pressure_samples_second_half": int(len(late))})
         return summary
 
     def _write_checkpoint(self) -> None:
         meta = {"writers": {"pvd_entries": self.writers.pvd_entries, "gas_pvd_entries": self.writers.gas_pvd_entries,
                             "wall_seconds": self.writers.wall_seconds, "cpu_seconds": self.writers.cpu_seconds,
-                            "settled": self.writers.settled},
+                            "settled": self.writers.settled, "pressure_history": self.writers.pressure_history},
                 "time": self.time}
         state = {}
         if self.dem is not None:

@@ -65,13 +65,14 @@ def test_periodic_gas_box_accelerates_under_its_body_force():
 
 
 def test_particles_and_gas_in_one_case_write_both_and_step_in_ratio(tmp_path):
-    """Particles and gas together (not yet coupled: issue 4): a gas step every cfd/dem DEM steps, and
-    particle and gas snapshots side by side."""
+    """Particles and gas together with the coupling switched off: a gas step every cfd/dem DEM steps,
+    and particle and gas snapshots side by side."""
     from fvdem.case import case_from_dict
     case = case_from_dict({
         "domain": {"upper": [0.06, 0.06, 0.15]},
         "particles": {"count": 60, "insertion": {"upper": [0.06, 0.06, 0.1]}},
         "gas": {"enabled": True, "cells": [4, 4, 10], "inlet_velocity": 0.2, "cfd_step": 1e-4},
+        "coupling": {"enabled": False},
         "time": {"end": 0.002},
         "output": {"progress": False, "snapshot_interval": 0.001, "timeseries_interval": 0.0005,
                    "checkpoint_interval": 0.001}})

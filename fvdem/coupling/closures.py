@@ -77,14 +77,20 @@ def _slip_state(slip, voidage, d_p, rho, mu):
     return slip, speed, np.maximum(slip_reynolds(speed, voidage, d_p, rho, mu), 1e-12)
 
 
-def single_particle_drag(slip, voidage, d_p, rho, mu, phi=1.0, crosswise=1.0, lengthwise=1.0):
-    """Drag force [N] (N, 3): Hoelzer-Sommerfeld with Di Felice's voidage function (Eq. 9):
-    ``F = 1/2 C_D rho eps^(2 - chi) (pi/4) d_p^2 |u| u`` with C_D and chi at the superficial Re.
-    Spheres: ``phi = crosswise = lengthwise = 1``."""
+def single_particle_drag_coefficient(slip, voidage, d_p, rho, mu, phi=1.0, crosswise=1.0, lengthwise=1.0):
+    """Drag coefficient ``c`` [kg/s] (N,) with ``F = c u`` of Hoelzer-Sommerfeld with Di Felice's
+    voidage function (Eq. 9): ``c = 1/2 C_D rho eps^(2 - chi) (pi/4) d_p^2 |u|`` with C_D and chi at the
+    superficial Re. Spheres: ``phi = crosswise = lengthwise = 1``. Finite at zero slip (Stokes limit
+    ``3 pi mu d_p eps^(3 - chi)``)."""
     slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
-    cd = hoelzer_sommerfeld_cd(re, phi, crosswise, lengthwise)
-    factor = 0.5 * cd * rho * voidage ** (2.0 - di_felice_exponent(re)) * np.pi / 4 * d_p ** 2 * speed
-    return factor[:, None] * slip
+    cd_re = hoelzer_sommerfeld_cd(re, phi, crosswise, lengthwise) * re  # C_D Re stays finite as Re -> 0
+    return 0.5 * cd_re * mu / (d_p * voidage) * voidage ** (2.0 - di_felice_exponent(re)) * np.pi / 4 * d_p ** 2
+
+
+def single_particle_drag(slip, voidage, d_p, rho, mu, phi=1.0, crosswise=1.0, lengthwise=1.0):
+    """Drag force [N] (N, 3): ``single_particle_drag_coefficient`` times the slip (Eq. 9)."""
+    slip = np.atleast_2d(slip)
+    return single_particle_drag_coefficient(slip, voidage, d_p, rho, mu, phi, crosswise, lengthwise)[:, None] * slip
 
 
 # --------------------------------------------------------------------------- multi-particle (Sanjeevi & Padding 2020)
@@ -109,16 +115,23 @@ def sanjeevi_padding_drag_at(reynolds, solids, column):
     return f_isol * (1 - es) ** 2 + f_eps + f_re_eps
 
 
-def multi_particle_drag(slip, voidage, axis, d_p, rho, mu):
-    """Drag force [N] (N, 3) of Sanjeevi & Padding 2020 (Eqs. 15-16): ``3 pi mu d_p eps F_phi u`` with
-    ``F_phi = F_0 + (F_90 - F_0) sin^2 phi``, phi the angle between axis and slip."""
+def multi_particle_drag_coefficient(slip, voidage, axis, d_p, rho, mu):
+    """Drag coefficient ``c`` [kg/s] (N,) with ``F = c u`` of Sanjeevi & Padding 2020 (Eqs. 15-16):
+    ``c = 3 pi mu d_p eps F_phi``, ``F_phi = F_0 + (F_90 - F_0) sin^2 phi``, phi the angle between
+    axis and slip."""
     slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     solids = 1.0 - voidage
     cos2 = _cos2(axis, slip, speed)
     f0 = sanjeevi_padding_drag_at(re, solids, 0)
     f90 = sanjeevi_padding_drag_at(re, solids, 1)
     f_phi = f0 + (f90 - f0) * (1.0 - cos2)
-    return (3 * np.pi * mu * d_p * voidage * f_phi)[:, None] * slip
+    return 3 * np.pi * mu * d_p * voidage * f_phi
+
+
+def multi_particle_drag(slip, voidage, axis, d_p, rho, mu):
+    """Drag force [N] (N, 3): ``multi_particle_drag_coefficient`` times the slip."""
+    slip = np.atleast_2d(slip)
+    return multi_particle_drag_coefficient(slip, voidage, axis, d_p, rho, mu)[:, None] * slip
 
 
 def _cos2(axis, slip, speed):

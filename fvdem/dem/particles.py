@@ -89,7 +89,12 @@ class ParticleArrays:
         mass (N) [kg]; inertia (N,2) [kg m^2] (transverse, axial);
         colour (N) int32 tracer colour; ids (N) int64 stable particle id;
         contact_force/contact_torque (N,3): from particle and wall contacts [N], [N m];
-        external_force/external_torque (N,3): hydrodynamic and other forces set by the caller.
+        external_force/external_torque (N,3): hydrodynamic and other forces set by the caller, held
+        over a step;
+        drag_coefficient (N) [kg/s]: implicit drag ``c`` with force ``c (fluid_velocity - velocity)``,
+        integrated implicitly by the kicks (0: no implicit drag); fluid_velocity (N,3) [m/s] the
+        gas velocity at the particle; drag_impulse (N,3) [N s] the drag impulse the kicks applied
+        since the coupling bridge last reset it.
     """
 
     position: np.ndarray
@@ -108,6 +113,9 @@ class ParticleArrays:
     contact_torque: np.ndarray
     external_force: np.ndarray
     external_torque: np.ndarray
+    drag_coefficient: np.ndarray
+    fluid_velocity: np.ndarray
+    drag_impulse: np.ndarray
 
     @property
     def count(self) -> int:
@@ -142,6 +150,9 @@ class ParticleArrays:
             contact_torque=zeros3(),
             external_force=zeros3(),
             external_torque=zeros3(),
+            drag_coefficient=np.zeros(n, dtype=FLOAT),
+            fluid_velocity=zeros3(),
+            drag_impulse=zeros3(),
         )
 
     def permute(self, order: np.ndarray) -> None:
@@ -154,8 +165,12 @@ class ParticleArrays:
 
     @classmethod
     def from_dict(cls, data) -> "ParticleArrays":
-        """New arrays (always copies, never views of ``data``)."""
-        return cls(**{f.name: np.array(data[f.name], order="C", copy=True) for f in fields(cls)})
+        """New arrays (always copies, never views of ``data``). Coupling arrays missing from ``data``
+        (a state written by a DEM-only run) start at zero."""
+        n = len(data["mass"])
+        optional = {"drag_coefficient": (n,), "fluid_velocity": (n, 3), "drag_impulse": (n, 3)}
+        return cls(**{f.name: (np.array(data[f.name], order="C", copy=True) if f.name in data
+                               else np.zeros(optional[f.name])) for f in fields(cls)})
 
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy [J]."""

@@ -6,7 +6,9 @@ them with the numba kernels. One step (velocity Verlet):
 3. ``pair_forces`` then ``gather_forces``: contact forces and torques, walls included;
 4. ``kick``: second half kick.
 
-External (e.g. hydrodynamic) forces in ``particles.external_force/torque`` are held over the step.
+External (e.g. hydrodynamic) forces in ``particles.external_force/torque`` are held over the step;
+with ``implicit_drag`` the kicks also integrate ``drag_coefficient (fluid_velocity - velocity)``
+implicitly.
 """
 from __future__ import annotations
 
@@ -75,11 +77,17 @@ class DEMSystem:
         self.box = box
         self.contact = contact
         self.dt = float(dt)
+        if particles.count:
+            tc = contact.collision_time(float(particles.mass.min()))
+            if self.dt > 0.5 * tc:
+                raise SimulationError(f"DEM time step {self.dt:.3g} s exceeds half the collision time {tc:.3g} s: "
+                                      "contacts cannot be resolved (use at most 1/10 of it)")
         self.gravity = np.asarray(gravity, dtype=np.float64)
         diam = 2.0 * float(particles.radius.min())
         self.skin = float(skin) if skin is not None else 0.1 * diam
         self.params = contact.parameters(self.dt, float(np.median(particles.mass)))
         self.track_orientation = bool(np.any(particles.half_length > 0.0))
+        self.implicit_drag = False  # set by the coupling bridge: kicks integrate particles.drag_coefficient
         self._uniform = self._pair_constants(particles)
         self.step_count = 0
         self.rebuild_count = 0
@@ -139,13 +147,14 @@ class DEMSystem:
             kick_drift(p.position, p.velocity, p.angular_momentum, p.angular_velocity, p.quaternion, p.axis,
                        p.half_length, p.mass, p.inertia, p.contact_force, p.contact_torque, p.external_force,
                        p.external_torque, self.gravity, self.dt, self.reference_position, self.reference_axis,
-                       self.displacement, self.track_orientation)
+                       self.displacement, self.track_orientation, p.drag_coefficient, p.fluid_velocity,
+                       p.drag_impulse, self.implicit_drag)
             if self.displacement.max() > 0.5 * self.skin:
                 self.rebuild()
             self.compute_forces()
             kick(p.velocity, p.angular_momentum, p.angular_velocity, p.axis, p.half_length, p.mass, p.inertia,
                  p.contact_force, p.contact_torque, p.external_force, p.external_torque, self.gravity, self.dt,
-                 self.track_orientation)
+                 self.track_orientation, p.drag_coefficient, p.fluid_velocity, p.drag_impulse, self.implicit_drag)
             self.step_count += 1
 
     def compute_forces(self) -> None:

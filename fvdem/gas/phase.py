@@ -24,7 +24,6 @@ class GasPhase:
                                 correctors=g.correctors, linear_solver=g.linear_solver,
                                 linear_tolerance=g.linear_tolerance)
         self.dt = g.cfd_step
-        self.solver.source[:] = np.asarray(g.body_force, float)
         self.step_count = 0
         zone = g.porous_zone
         centres = self.mesh.cell_centers
@@ -34,6 +33,22 @@ class GasPhase:
             self.zone = np.zeros(self.mesh.cell_count, bool)
         self.solver.voidage[self.zone] = zone.voidage
         self.solver.voidage_old[:] = self.solver.voidage
+        n = self.mesh.cell_count
+        self.exchange_beta = np.zeros(n)  # set by the coupling bridge [kg/(m^3 s)]
+        self.exchange_source = np.zeros((n, 3))  # [N/m^3]
+        self._body_force = np.asarray(g.body_force, float)
+
+    def set_voidage(self, voidage, previous=None) -> None:
+        """New particle voidage for the next step; the current one becomes the old level of the
+        ``d(eps)/dt`` term (or ``previous`` when given, e.g. at start-up)."""
+        s = self.solver
+        s.voidage_old[:] = s.voidage if previous is None else previous
+        s.voidage[:] = voidage
+
+    def set_exchange(self, beta, source) -> None:
+        """Interphase momentum exchange of the next step: ``-beta u + source`` per unit volume (Eq. 8)."""
+        self.exchange_beta[:] = beta
+        self.exchange_source[:] = source
 
     def _update_porous_zone(self) -> None:
         if not self.zone.any():
@@ -41,13 +56,16 @@ class GasPhase:
         z = self.config.porous_zone
         solids = 1.0 - z.voidage
         speed = np.linalg.norm(self.solver.velocity[self.zone], axis=1)
-        self.solver.beta[self.zone] = (150.0 * solids ** 2 * self.config.viscosity / (z.voidage * z.particle_diameter ** 2)
+        self.solver.beta[self.zone] += (150.0 * solids ** 2 * self.config.viscosity / (z.voidage * z.particle_diameter ** 2)
                                        + 1.75 * solids * self.config.density * speed / z.particle_diameter)
 
     def step(self) -> dict:
+        s = self.solver
+        s.beta[:] = self.exchange_beta
         self._update_porous_zone()
-        self.solver.voidage_old[:] = self.solver.voidage
-        info = self.solver.step(self.dt)
+        s.source[:] = self._body_force + self.exchange_source
+        info = s.step(self.dt)
+        s.voidage_old[:] = s.voidage
         self.step_count += 1
         return info
 
@@ -65,8 +83,17 @@ class GasPhase:
 
     def diagnostics(self) -> dict:
         s = self.solver
+        z = self.mesh.cell_centers[:, 2]
         diag = {"gas_max_speed": float(np.linalg.norm(s.velocity, axis=1).max()),
-                "gas_inlet_pressure": self.plane_pressure(self.mesh.cell_centers[:, 2].min())}
+                "gas_inlet_pressure": self.plane_pressure(z.min())}
+        if not s.periodic:
+            # pressure drop from the inlet face (extrapolated as the solver's gradient takes it) to
+            # the last cell layer, less the gas head: what the particles (and wall friction) hold up [Pa]
+            first = self.plane_pressure(z.min())
+            inlet = first + 0.5 * (first - self.plane_pressure(z.min() + self.mesh.spacing[2]))
+            inlet_height = z.min() - 0.5 * self.mesh.spacing[2]
+            diag["bed_pressure_drop"] = (inlet - self.plane_pressure(z.max())
+                                         + self.config.density * s.gravity[2] * (z.max() - inlet_height))
         if self.zone.any():
             z = self.config.porous_zone
             lo, hi = z.lower[2], z.upper[2]

@@ -1,0 +1,251 @@
+"""The source-term bridge: one coupling interval (one CFD step = n DEM steps) of gas and particles.
+
+Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
+
+1. **Map** the particles to the grid (``ParticleGridMap``: satellite points along rods, trilinear
+   weights) and compute the voidage (``divided``, ``centroid`` or ``trilinear``); the previous
+   voidage becomes the old level of the gas's ``d(eps)/dt``.
+2. **Closures** at the particles: gas velocity (reconstructed from the face fluxes:
+   ``GasSolver.flux_velocity``, exact across voidage jumps) and voidage interpolated, slip
+   ``u - v``, drag coefficient ``c`` [kg/s] (drag ``F_D = c (u - v)``), lift and torque.
+3. **Gas step** with Eq. 8, ``R = -sum (F_D + F_L) / V_cell``, deposited with the transposed
+   interpolation weights. *Semi-implicit* (default): the drag enters the gas momentum as
+   ``-beta u + S``. The coefficient accounts for the particle's own response over the interval:
+   a particle kicked implicitly towards ``u`` with its other forces ``m a`` held gains the drag
+   impulse ``J = m (1 - R) (u - v) + m a [(1 - R) m / c - dt]`` with ``R = (1 + h c / 2m)^(-2n)``,
+   so ``beta = sum w m (1 - R) / (dt V)`` and ``S = sum w [m (1 - R) v - m a ((1 - R) m / c - dt)] /
+   (dt V)``. For ``h c / m -> 0`` this is the usual ``beta = sum c / V``, ``S = beta v``; for
+   particles much faster than the step it is ``m / dt`` (the particle follows the gas) instead of a
+   stiff ``c`` that would stall the exchange. *Explicit*: the force at the coupling time is held
+   over the interval on both sides (CFDEMcoupling's default; unstable for ``dt > 2 m / c``).
+4. **Particles**: the new gas velocity and pressure gradient are interpolated; the DEM kicks
+   integrate ``c (u - v)`` implicitly (``implicit_drag``) and hold ``-V_p grad p`` + lift and the
+   torque; the kicks record the drag impulse they apply.
+5. **Exact exchange**: the gas lost ``V (beta u - S) dt`` per cell, the particles gained the
+   recorded impulse; the (small) difference — from contact forces changing within the interval —
+   is returned to the gas velocity, so that gas plus particle momentum changes by the external
+   forces only, to round-off.
+
+Torque is not fed back to the gas (MODEL.md §2). A sphere case evaluates no lift or torque.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dem.particles import spherocylinder_volume
+from ..dem.system import SimulationError
+from . import closures
+from .interpolation import ParticleGridMap
+from .voidage import voidage as map_voidage
+
+
+@dataclass(frozen=True)
+class HydrodynamicModel:
+    """Closures chosen by name (``coupling`` case section) for particles of one shape.
+
+    ``diameter`` the sphere or cylinder diameter [m]; ``length`` the total length [m] (= diameter for
+    spheres); ``density``/``viscosity`` of the gas [kg/m^3], [Pa s].
+    """
+
+    drag: str
+    lift: str
+    torque: str
+    diameter: float
+    length: float
+    density: float
+    viscosity: float
+
+    @property
+    def equivalent_diameter(self) -> float:
+        return float(closures.spherocylinder_shape(self.diameter, self.length)[0])
+
+    @property
+    def is_sphere(self) -> bool:
+        return self.length <= self.diameter
+
+    def drag_coefficient(self, slip, voidage, axis):
+        """``c`` [kg/s] (N,) with ``F_D = c * slip``."""
+        d_p, rho, mu = self.equivalent_diameter, self.density, self.viscosity
+        if self.drag == "none":
+            return np.zeros(len(slip))
+        if self.drag == "sanjeevi-padding":
+            return closures.multi_particle_drag_coefficient(slip, voidage, axis, d_p, rho, mu)
+        if self.is_sphere:
+            return closures.single_particle_drag_coefficient(slip, voidage, d_p, rho, mu)
+        theta = closures.incidence_angle(axis, slip)
+        phi, crosswise, lengthwise = closures.sphericities(self.diameter, self.length, theta)
+        return closures.single_particle_drag_coefficient(slip, voidage, d_p, rho, mu, phi, crosswise, lengthwise)
+
+    def lift_force(self, slip, voidage, axis):
+        """Lift [N] (N, 3), or None when the model has none."""
+        args = (slip, voidage, axis, self.equivalent_diameter, self.density, self.viscosity)
+        if self.lift == "zastawny":
+            return closures.single_particle_lift(*args)
+        if self.lift == "sanjeevi-padding":
+            return closures.multi_particle_lift(*args)
+        return None
+
+    def hydrodynamic_torque(self, slip, voidage, axis):
+        """Hydrodynamic torque [N m] (N, 3), or None when the model has none."""
+        args = (slip, voidage, axis, self.equivalent_diameter, self.density, self.viscosity)
+        if self.torque == "zastawny":
+            return closures.single_particle_torque(*args)
+        if self.torque == "sanjeevi-padding":
+            return closures.multi_particle_torque(*args)
+        return None
+
+
+def particle_response(mass, drag_coefficient, substep, substeps):
+    """``(1 - R, k)`` of the implicit kicks over one coupling interval: ``R = (1 + q)^(-2n)``,
+    ``q = (h / 2) c / m``, and ``k = (1 - R) m / (c dt) - 1`` (0 where ``c = 0``), ``dt = n h``."""
+    q = 0.5 * substep * drag_coefficient / mass
+    one_minus_r = -np.expm1(-2.0 * substeps * np.log1p(q))
+    x = drag_coefficient * substep * substeps / mass
+    k = np.divide(one_minus_r, x, out=np.ones_like(x), where=x > 0) - 1.0
+    return one_minus_r, k
+
+
+class CouplingBridge:
+    """Couples a ``DEMSystem`` and a ``GasPhase`` for one case (``case.coupling``)."""
+
+    def __init__(self, case, dem, gas):
+        self.config = cfg = case.coupling
+        self.dem, self.gas = dem, gas
+        p = case.particles
+        self.fixed = p.fixed
+        self.model = HydrodynamicModel(cfg.drag, cfg.lift if p.shape != "sphere" else "none",
+                                       cfg.torque if p.shape != "sphere" else "none", p.diameter,
+                                       p.length if p.shape != "sphere" else p.diameter,
+                                       case.gas.density, case.gas.viscosity)
+        self.cfd_step = case.gas.cfd_step
+        self.substeps = max(1, round(case.gas.cfd_step / case.time.dem_step))
+        self.semi_implicit = cfg.drag_treatment == "semi-implicit"
+        self.dem.implicit_drag = self.semi_implicit and not self.fixed
+        self.mesh = gas.mesh
+        self.last: dict = {"drag_force": np.zeros(3), "pressure_force": np.zeros(3), "momentum_returned": 0.0}
+        if cfg.two_way:
+            eps = self._voidage(self._grid_map())
+            gas.set_voidage(eps, previous=eps)
+
+    # ------------------------------------------------------------------ pieces
+    def _grid_map(self) -> ParticleGridMap:
+        return ParticleGridMap(self.mesh, self.dem.particles, "trilinear", self.config.satellites)
+
+    def _voidage(self, grid_map):
+        cfg = self.config
+        eps, over_packed = map_voidage(self.dem.particles, self.mesh, cfg.voidage, cfg.satellites,
+                                       cfg.minimum_voidage, grid_map=grid_map)
+        self.last["over_packed_cells"] = over_packed
+        return eps
+
+    def particle_volume(self):
+        p = self.dem.particles
+        return spherocylinder_volume(p.radius, p.half_length)
+
+    # ------------------------------------------------------------------ one interval
+    def advance(self) -> None:
+        """One CFD step of the gas and ``substeps`` DEM steps of the particles, coupled."""
+        dem, gas, cfg = self.dem, self.gas, self.config
+        p, s, mesh = dem.particles, gas.solver, self.mesh
+        dt = self.cfd_step
+        grid_map = self._grid_map()
+        eps = self._voidage(grid_map)
+        if cfg.two_way:  # one-way coupling: the gas does not see the particles at all
+            gas.set_voidage(eps)
+        eps_p = np.clip(grid_map.gather(eps), cfg.minimum_voidage, 1.0)
+        velocity = np.zeros_like(p.velocity) if self.fixed else p.velocity
+        slip = grid_map.gather(s.flux_velocity()) - velocity
+        c = self.model.drag_coefficient(slip, eps_p, p.axis)
+        lift = self.model.lift_force(slip, eps_p, p.axis)
+        torque = self.model.hydrodynamic_torque(slip, eps_p, p.axis)
+        volume_cells = mesh.cell_volumes[:, None]
+        explicit_drag = None
+        if not self.semi_implicit:
+            explicit_drag = c[:, None] * slip
+            self._check_explicit_stability(c, p.mass)
+        if cfg.two_way:
+            if explicit_drag is not None:
+                beta, exchanged = np.zeros(mesh.cell_count), -explicit_drag
+            elif self.fixed:
+                beta, exchanged = grid_map.scatter(c) / mesh.cell_volumes, np.zeros_like(slip)
+            else:
+                one_minus_r, k = particle_response(p.mass, c, dem.dt, self.substeps)
+                accel = (p.contact_force + p.external_force) / p.mass[:, None] + dem.gravity
+                coefficient = p.mass * one_minus_r / dt
+                beta = grid_map.scatter(coefficient) / mesh.cell_volumes
+                exchanged = coefficient[:, None] * velocity - (p.mass * k)[:, None] * accel
+            if lift is not None:
+                exchanged = exchanged - lift
+            gas.set_exchange(beta, grid_map.scatter(exchanged) / volume_cells)
+        gas.step()
+        fluid_velocity = grid_map.gather(s.flux_velocity())
+        external = np.zeros_like(slip)
+        if cfg.pressure_gradient_force:
+            external -= self.particle_volume()[:, None] * grid_map.gather(s._pressure_gradient(s.pressure))
+        pressure_force = external.sum(axis=0)
+        if lift is not None:
+            external += lift
+        if explicit_drag is not None:
+            external += explicit_drag
+        if explicit_drag is not None:
+            impulse = None  # the held force is what both sides exchanged
+        elif self.fixed:
+            impulse = c[:, None] * fluid_velocity * dt
+        else:
+            p.external_force[:] = external
+            p.external_torque[:] = 0.0 if torque is None else torque
+            p.drag_coefficient[:] = c
+            p.fluid_velocity[:] = fluid_velocity
+            p.drag_impulse[:] = 0.0
+            ids_before = p.ids.copy()
+            dem.step(self.substeps)
+            p = dem.particles
+            impulse = _in_order(p.drag_impulse, p.ids, ids_before)
+        if explicit_drag is not None and not self.fixed:
+            p.external_force[:] = external
+            p.external_torque[:] = 0.0 if torque is None else torque
+            p.drag_coefficient[:] = 0.0
+            p.fluid_velocity[:] = fluid_velocity
+            dem.step(self.substeps)
+        returned = 0.0
+        if impulse is not None and cfg.two_way:
+            # the gas lost V (beta u - S) dt per cell (u its momentum velocity); the particles gained
+            # the drag impulse the kicks applied (with the flux velocity): return the difference
+            lost = (gas.exchange_beta[:, None] * s.velocity - gas.exchange_source) * volume_cells * dt
+            if lift is not None:
+                lost -= grid_map.scatter(lift) * dt  # the lift is explicit on both sides: not in the balance
+            difference = lost - grid_map.scatter(impulse)
+            s.velocity += difference / (gas.config.density * s.voidage[:, None] * volume_cells)
+            returned = float(np.abs(difference.sum(axis=0)).max())
+        drag_force = explicit_drag.sum(axis=0) if impulse is None else impulse.sum(axis=0) / dt
+        self.last.update(drag_force=drag_force, pressure_force=pressure_force, momentum_returned=returned)
+
+    def _check_explicit_stability(self, c, mass) -> None:
+        """Explicit drag held over the CFD step diverges once ``dt > 2 m / c`` (forward Euler)."""
+        if not len(c):
+            return
+        response = mass / np.maximum(c, 1e-300)
+        i = int(np.argmin(response))
+        if self.cfd_step > 2.0 * response[i]:
+            raise SimulationError(
+                f"explicit drag is unstable: CFD step {self.cfd_step:.3g} s exceeds 2 x the particle response time "
+                f"{response[i]:.3g} s (m / c of particle id {int(self.dem.particles.ids[i])}); use "
+                "coupling.drag_treatment = 'semi-implicit' or a CFD step below "
+                f"{2.0 * response[i]:.3g} s")
+
+    # ------------------------------------------------------------------ observables
+    def diagnostics(self) -> dict:
+        return {"over_packed_cells": self.last["over_packed_cells"],
+                "total_drag_z": float(self.last["drag_force"][2]),
+                "total_pressure_force_z": float(self.last["pressure_force"][2])}
+
+
+def _in_order(values, ids_now, ids_before):
+    """Rows of ``values`` (in the order of ``ids_now``) rearranged into the order of ``ids_before``."""
+    if np.array_equal(ids_now, ids_before):
+        return values
+    row_of = np.empty(int(max(ids_now.max(), ids_before.max())) + 1, np.int64)
+    row_of[ids_now] = np.arange(len(ids_now))
+    return values[row_of[ids_before]]
