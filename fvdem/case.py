@@ -143,6 +143,9 @@ class OutputConfig:
     timeseries_interval: float = spec(1.0e-3, unit="time", gt=0.0, doc="timeseries.csv rows every [s]")
     checkpoint_interval: float = spec(0.1, unit="time", gt=0.0, doc="checkpoints every [s]")
     vtk: bool = spec(True, kind="bool", doc="write ParaView snapshots")
+    mixing_cells: tuple | None = spec(None, kind="int3", ge=1, optional=True,
+                                      doc="analysis grid of the mixing entropy (default: half the gas grid, "
+                                          "the paper's 5 x 5 x 35 on 10 x 10 x 70; without gas 5 x 5 x 35)")
     progress: bool = spec(True, kind="bool", doc="show a progress bar")
 
 
@@ -163,6 +166,11 @@ class GasConfig:
     viscosity: float = spec(1.568e-5, gt=0.0, doc="dynamic viscosity [Pa s]")
     inlet_velocity: float = spec(0.0, unit="velocity", ge=0.0,
                                  doc="superficial gas velocity through the bottom (distributor) [m/s]")
+    u_over_umf: float | None = spec(None, gt=0.0, optional=True,
+                                    doc="inlet velocity as a multiple of gas.umf (sets inlet_velocity = u_over_umf x umf)")
+    umf: float | None = spec(None, unit="velocity", gt=0.0, optional=True,
+                             doc="minimum fluidization velocity [m/s] that u_over_umf refers to (seed 000: "
+                                 "1.58 m/s AR-1, 1.7 m/s AR-4)")
     walls: str = spec("no-slip", kind="str", choices=("no-slip", "free-slip"), doc="side-wall condition")
     cfd_step: float = spec(1.0e-4, unit="time", gt=0.0, doc="CFD time step [s]")
     scheme: str = spec("piso", kind="str", choices=("piso", "simple"), doc="pressure-velocity coupling")
@@ -485,6 +493,15 @@ def parse_override(text: str):
 def case_from_dict(table: dict, source: str | None = None) -> Case:
     problems: list[str] = []
     case = _build(Case, table, "", problems)
+    if not problems and case.gas.u_over_umf is not None:
+        g = case.gas
+        if g.umf is None:
+            problems.append(f"gas.u_over_umf = {g.u_over_umf:g}: needs gas.umf (the minimum fluidization velocity, m/s)")
+        elif "inlet_velocity" in table.get("gas", {}) and abs(g.inlet_velocity - g.u_over_umf * g.umf) > 1e-12:
+            problems.append(f"gas.inlet_velocity = {g.inlet_velocity:g} and gas.u_over_umf = {g.u_over_umf:g}: "
+                            "give one of them")
+        else:
+            case = replace(case, gas=replace(g, inlet_velocity=g.u_over_umf * g.umf))
     if not problems:
         _cross_checks(case, problems)
     if problems:

@@ -19,6 +19,7 @@ import numba
 import numpy as np
 
 from .analysis.bed import bed_top, packed_bed_summary
+from .analysis.mixing import lacey_index, mixing_entropy, mixing_time
 from .case import Case, CaseError, to_toml
 from .coupling.bridge import CouplingBridge
 from .dem.insertion import insert_particles
@@ -125,6 +126,7 @@ class _WriterState:
     cpu_seconds: float = 0.0
     settled: bool = False
     pressure_history: list = field(default_factory=list)  # (time [s], bed pressure drop [Pa]) rows
+    mixing_history: list = field(default_factory=list)  # (time [s], mixing entropy) rows
 
 
 class Simulation:
@@ -155,6 +157,12 @@ class Simulation:
         self._cfd_every = max(1, round(case.gas.cfd_step / case.time.dem_step)) if has_particles else 1
         self.gas = GasPhase(case) if case.gas.enabled else None
         self.bridge = None
+        if case.output.mixing_cells is not None:
+            self.mixing_cells = tuple(case.output.mixing_cells)
+        elif case.gas.enabled:
+            self.mixing_cells = tuple(max(1, n // 2) for n in case.gas.cells)
+        else:
+            self.mixing_cells = (5, 5, 35)
         self._timeseries_schedule = _Schedule(max(1, round(case.output.timeseries_interval / dt)))
         self._snapshot_schedule = _Schedule(max(1, round(case.output.snapshot_interval / dt)))
         self._checkpoint_schedule = _Schedule(max(1, round(case.output.checkpoint_interval / dt)))
@@ -183,6 +191,11 @@ class Simulation:
                 self._on_events(self.step_count)
 
     # ------------------------------------------------------------------ state access
+    @property
+    def two_colours(self) -> bool:
+        """Whether the particles carry two tracer colours (then the mixing is measured)."""
+        return self.dem is not None and self.case.particles.colour == "by_height"
+
     @property
     def particles(self) -> ParticleArrays | None:
         return self.dem.particles if self.dem is not None else None
@@ -237,6 +250,10 @@ class Simulation:
         diag.update(self.dem.diagnostics())
         p = self.particles
         diag["bed_top"] = bed_top(p.position, p.axis, p.radius, p.half_length)
+        if self.two_colours:
+            lo, hi = self.case.domain.lower, self.case.domain.upper
+            diag["mixing_entropy"] = mixing_entropy(p.position, p.colour, lo, hi, self.mixing_cells)
+            diag["lacey_index"] = lacey_index(p.position, p.colour, lo, hi, self.mixing_cells)
         if self.bridge is not None:
             diag.update(self.bridge.diagnostics())
             if "bed_pressure_drop" in diag:
@@ -304,6 +321,9 @@ class Simulation:
             diag = self.diagnostics()
             if "pressure_drop_over_weight" in diag and step > 0:
                 self.writers.pressure_history.append((self.time, diag["bed_pressure_drop"]))
+            if "mixing_entropy" in diag and (not self.writers.mixing_history
+                                             or self.writers.mixing_history[-1][0] < self.time):
+                self.writers.mixing_history.append((self.time, diag["mixing_entropy"]))
             if self.out is not None:
                 self._timeseries().append(diag)
             t = self.case.time
@@ -334,6 +354,8 @@ class Simulation:
                 columns += ("porous_zone_pressure_gradient",)
             if not self.gas.solver.periodic:
                 columns += ("bed_pressure_drop",)
+        if self.two_colours:
+            columns += ("mixing_entropy", "lacey_index")
         if self.bridge is not None:
             columns += ("over_packed_cells", "total_drag_z", "total_pressure_force_z")
             if not self.gas.solver.periodic:
@@ -370,6 +392,12 @@ class Simulation:
                                     "wall_contacts", "rms_speed", "max_speed")},
         })
         summary.update(packed_bed_summary(self.particles, self.dem.box))
+        if self.two_colours:
+            history = np.asarray(self.writers.mixing_history, float).reshape(-1, 2)
+            summary["mixing_entropy"] = diag["mixing_entropy"]
+            summary["lacey_index"] = diag["lacey_index"]
+            summary["mixing_cells"] = list(self.mixing_cells)
+            summary["t95"] = mixing_time(history[:, 0], history[:, 1]) if len(history) else None
         if self.bridge is not None:
             summary["coupling"] = {"drag": self.bridge.model.drag, "lift": self.bridge.model.lift,
                                    "torque": self.bridge.model.torque,
@@ -389,7 +417,8 @@ class Simulation:
     def _write_checkpoint(self) -> None:
         meta = {"writers": {"pvd_entries": self.writers.pvd_entries, "gas_pvd_entries": self.writers.gas_pvd_entries,
                             "wall_seconds": self.writers.wall_seconds, "cpu_seconds": self.writers.cpu_seconds,
-                            "settled": self.writers.settled, "pressure_history": self.writers.pressure_history},
+                            "settled": self.writers.settled, "pressure_history": self.writers.pressure_history,
+                            "mixing_history": self.writers.mixing_history},
                 "time": self.time}
         state = {}
         if self.dem is not None:

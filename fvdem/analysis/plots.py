@@ -35,7 +35,9 @@ LABELS = {"kinetic_energy": "kinetic energy [J]", "bed_top": "bed top [m]",
           "contacts_per_particle": "contacts per particle", "max_overlap_over_diameter": "max overlap / diameter",
           "rms_speed": "RMS particle speed [m/s]", "max_speed": "max particle speed [m/s]",
           "gas_max_speed": "max gas speed [m/s]", "gas_inlet_pressure": "inlet pressure [Pa]",
-          "porous_zone_pressure_gradient": "porous-zone -dp/dz [Pa/m]"}
+          "porous_zone_pressure_gradient": "porous-zone -dp/dz [Pa/m]",
+          "mixing_entropy": "mixing entropy S_tot", "lacey_index": "Lacey index",
+          "pressure_drop_over_weight": "bed pressure drop / (W/A)"}
 
 
 def plot_timeseries(out) -> Path:
@@ -108,6 +110,30 @@ def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path
     return _save(fig, Path(out) / "colours.png")
 
 
+def plot_mixing(runs, path, level=0.95) -> Path:
+    """Mixing entropy against time for one or more run folders on one chart (seed 000 Figs. 2-3),
+    the t95 of each marked."""
+    from .mixing import mixing_time
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    for out in runs:
+        ts = read_timeseries(out)
+        if "mixing_entropy" not in ts:
+            continue
+        t95 = mixing_time(ts["time"], ts["mixing_entropy"], level)
+        label = Path(out).name + (f" (t95 = {t95:.2f} s)" if t95 is not None else " (t95 not reached)")
+        line, = ax.plot(ts["time"], ts["mixing_entropy"], label=label)
+        if t95 is not None:
+            ax.axvline(t95, color=line.get_color(), ls=":", lw=1)
+    ax.axhline(level, color="grey", lw=0.8, ls="--")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("mixing entropy S_tot")
+    ax.set_ylim(0, 1.05)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(fig, Path(path))
+
+
 def report(out) -> list:
     """All plots a run folder supports; returns the written paths."""
     out = Path(out)
@@ -116,4 +142,6 @@ def report(out) -> list:
         paths.append(plot_colour_slice(out))
     if any(out.glob("gas_*.vtu")):
         paths.append(plot_gas_profile(out))
+    if "mixing_entropy" in read_timeseries(out):
+        paths.append(plot_mixing([out], out / "mixing.png"))
     return paths

@@ -147,6 +147,11 @@ class GasSolver:
         self.face_flux[self._inlet] = self._inlet_flux
 
     # ------------------------------------------------------------------ helpers
+    def set_inlet_velocity(self, velocity: float) -> None:
+        """Change the superficial inlet velocity [m/s] from the next step on (e.g. a velocity ramp)."""
+        self.inlet_velocity = float(velocity)
+        self._inlet_flux = -self.inlet_velocity * self.mesh.face_areas[self._inlet]
+
     def flux_velocity(self):
         """Interstitial velocity (C, 3) [m/s] reconstructed from the face fluxes: per axis the mean of
         the two faces' ``phi n / A``, divided by the voidage. Unlike the cell-centred momentum

@@ -1,0 +1,49 @@
+"""Mixing measures against their limits: segregated 0, random mixture ~1, analytic cases."""
+import numpy as np
+import pytest
+
+from fvdem.analysis.mixing import lacey_index, mixing_entropy, mixing_time, orientation_angles
+
+LOWER, UPPER = (0.0, 0.0, 0.0), (0.15, 0.15, 1.05)
+
+
+def _bed(n=20000, seed=1, height=0.21):
+    rng = np.random.default_rng(seed)
+    return rng.uniform((0, 0, 0), (0.15, 0.15, height), (n, 3))
+
+
+def test_segregated_layers_have_zero_entropy_and_lacey_zero():
+    position = _bed()
+    # the colour boundary on an analysis-cell face (cells are 0.03 m tall): every cell is pure
+    colour = (position[:, 2] >= 0.09).astype(int)
+    assert mixing_entropy(position, colour, LOWER, UPPER) == 0.0
+    assert lacey_index(position, colour, LOWER, UPPER) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_random_colours_approach_one():
+    position = _bed(200000)
+    colour = np.random.default_rng(2).integers(0, 2, len(position))
+    # a cell of ~700 particles at x1 ~ 1/2 +- 0.02 has S / ln 2 = 1 - O(1e-3)
+    assert mixing_entropy(position, colour, LOWER, UPPER) == pytest.approx(1.0, abs=2e-3)
+    assert lacey_index(position, colour, LOWER, UPPER) == pytest.approx(1.0, abs=0.05)
+
+
+def test_entropy_of_a_known_cell_mixture():
+    """Two occupied cells: one 50/50 (S = ln 2), one 25/75 (S = -(1/4 ln 1/4 + 3/4 ln 3/4)), equal counts."""
+    position = np.array([[0.01, 0.01, 0.01]] * 4 + [[0.01, 0.01, 0.5]] * 4)
+    colour = np.array([0, 1, 0, 1, 0, 1, 1, 1])
+    s2 = -(0.25 * np.log(0.25) + 0.75 * np.log(0.75))
+    expected = (np.log(2) * 4 + s2 * 4) / 8 / np.log(2)
+    assert mixing_entropy(position, colour, LOWER, UPPER) == pytest.approx(expected, rel=1e-14)
+
+
+def test_mixing_time_interpolates_the_first_crossing():
+    t = np.array([0.0, 1.0, 2.0, 3.0])
+    s = np.array([0.0, 0.5, 0.97, 0.9])
+    assert mixing_time(t, s) == pytest.approx(1.0 + 0.45 / 0.47)
+    assert mixing_time(t, s, 0.99) is None
+
+
+def test_orientation_angle_is_folded_to_a_quarter_turn():
+    axis = np.array([[0, 0, 1.0], [0, 0, -1.0], [1.0, 0, 0], [0, np.sqrt(0.5), np.sqrt(0.5)]])
+    np.testing.assert_allclose(orientation_angles(axis), [0, 0, np.pi / 2, np.pi / 4])

@@ -1,0 +1,183 @@
+"""Minimum fluidization velocity from a defluidization ramp (issue 5).
+
+A shallow bed of seed 000's particles (spheres, or AR-4 spherocylinders with single- or
+multi-particle closures) in a narrow column with seed 000's 15 mm cells is fluidized above Umf,
+then the gas velocity is stepped down to about 0.4 Umf; each velocity is held and the bed pressure
+drop averaged over the second half of the hold. Umf is where the fixed-bed branch (least-squares
+``dP = a U + b U^2``, Ergun's form, through the points below 0.85 W/A) meets the fluidized plateau
+(the mean of the points at and above 1.3 x the experimental Umf). Umf is a property of particles
+and gas, so a shallower bed than the paper's may be used: the output says which bed was used.
+
+    python tools/validate_umf.py --shape sphere --json
+    python tools/validate_umf.py --shape spherocylinder --closures mp --json
+
+Prints progress, writes ``umf_<shape>[_<closures>].png`` (pressure drop over weight against U)
+and, as the last line, one JSON object.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+import fvdem
+from fvdem.case import case_from_dict
+from fvdem.coupling.closures import spherocylinder_shape, sphericities
+
+RHO, MU, G = 1.2, 1.568e-5, 9.81
+EXPERIMENT = {"sphere": 1.58, "spherocylinder": 1.7}
+
+
+def build_case(shape, closures, particles, threads):
+    p = {"shape": shape, "count": particles, "density": 1442.0, "colour": "single",
+         "insertion": {"upper": [0.06, 0.06, 0.2], "seed": 7}}
+    coupling = {"drag": "hoelzer-sommerfeld"}
+    if shape == "sphere":
+        p["diameter"] = "5.3 mm"
+    else:
+        p.update(diameter="3 mm", length="12 mm")
+        name = "sanjeevi-padding" if closures == "mp" else "zastawny"
+        coupling = {"drag": "sanjeevi-padding" if closures == "mp" else "hoelzer-sommerfeld",
+                    "lift": name, "torque": name}
+    return case_from_dict({
+        "name": "umf",
+        "domain": {"upper": [0.06, 0.06, 0.45]},
+        "particles": p,
+        "contact": {"normal_stiffness": 2.0e4, "restitution": 0.43, "friction": 0.46, "rolling_friction": 0.46},
+        "time": {"dem_step": 1e-5, "end": 100.0},
+        "gas": {"enabled": True, "cells": [4, 4, 30], "cfd_step": 1e-4,
+                "inlet_velocity": 2.0 * EXPERIMENT[shape]},
+        "coupling": coupling,
+        "output": {"progress": False, "timeseries_interval": 1e-3},
+        "run": {"threads": threads}})
+
+
+def wen_yu(d_p, rho_p):
+    archimedes = d_p ** 3 * RHO * (rho_p - RHO) * G / MU ** 2
+    reynolds = np.sqrt(33.7 ** 2 + 0.0408 * archimedes) - 33.7
+    return float(reynolds * MU / (RHO * d_p))
+
+
+def ergun_umf(d_p, rho_p, voidage, sphericity):
+    """Root of Ergun's pressure gradient = bed weight per volume at the packed bed's voidage."""
+    weight = (1 - voidage) * (rho_p - RHO) * G
+    a = 150 * (1 - voidage) ** 2 * MU / (voidage ** 3 * (sphericity * d_p) ** 2)
+    b = 1.75 * (1 - voidage) * RHO / (voidage ** 3 * sphericity * d_p)
+    return float((-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b))
+
+
+def mean_pressure_drop(sim, hold, sample=5e-4):
+    values = []
+    steps = int(round(hold / sample))
+    for k in range(steps):
+        sim.run(sample)
+        if k >= steps // 2:
+            values.append(sim.gas.diagnostics()["bed_pressure_drop"])
+    return float(np.mean(values)), float(np.std(values))
+
+
+def fit_umf(velocity, drop, weight, umf_experiment):
+    velocity, drop = np.asarray(velocity), np.asarray(drop)
+    fluidized = velocity >= 1.3 * umf_experiment
+    plateau = float(drop[fluidized].mean())
+    fixed = drop < 0.85 * weight
+    if fixed.sum() >= 2:
+        design = np.stack([velocity[fixed], velocity[fixed] ** 2], axis=1)
+        (a, b), *_ = np.linalg.lstsq(design, drop[fixed], rcond=None)
+    elif fixed.sum() == 1:
+        a, b = drop[fixed][0] / velocity[fixed][0], 0.0
+    else:
+        return plateau, None, (0.0, 0.0)
+    if abs(b) < 1e-12:
+        umf = plateau / a
+    else:
+        umf = (-a + np.sqrt(a * a + 4 * b * plateau)) / (2 * b)
+    return plateau, float(umf), (float(a), float(b))
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--shape", choices=("sphere", "spherocylinder"), default="sphere")
+    parser.add_argument("--closures", choices=("sp", "mp"), default="mp", help="AR-4 closures (ignored for spheres)")
+    parser.add_argument("--particles", type=int, default=2000)
+    parser.add_argument("--hold", type=float, default=0.25, help="seconds at each velocity")
+    parser.add_argument("--start", type=float, default=0.5, help="seconds fluidized before the ramp")
+    parser.add_argument("--quick", action="store_true", help="500 particles, short holds (a smoke test)")
+    parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--out", default=".")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.particles, args.hold, args.start = 500, 0.06, 0.15
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    shape = args.shape
+    umf_exp = EXPERIMENT[shape]
+    case = build_case(shape, args.closures, args.particles, args.threads)
+    sim = fvdem.Simulation(case)
+    weight = sim.bed_weight_per_area()
+    sim.run(args.start)
+    ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
+    if args.quick:
+        ratios = [2.0, 1.3, 1.0, 0.7, 0.4]
+    curve = []
+    for ratio in ratios:
+        u = ratio * umf_exp
+        sim.gas.solver.set_inlet_velocity(u)
+        drop, spread = mean_pressure_drop(sim, args.hold)
+        curve.append({"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
+                      "over_weight": drop / weight})
+        print(f"U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {drop:.1f} Pa = {drop / weight:.3f} W/A "
+              f"(+- {spread:.1f})", flush=True)
+    velocity = [c["velocity"] for c in curve]
+    drop = [c["pressure_drop"] for c in curve]
+    plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp)
+    p = case.particles
+    d_p = float(spherocylinder_shape(p.diameter, p.length or p.diameter)[0])
+    phi = float(sphericities(p.diameter, p.length or p.diameter, 0.0)[0])
+    packed = sim.summary().get("solids_fraction", 0.6)
+    tag = shape if shape == "sphere" else f"{shape}_{args.closures}"
+    png = Path(args.out) / f"umf_{tag}.png"
+    _plot(png, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag)
+    result = {
+        "shape": shape, "closures": None if shape == "sphere" else args.closures,
+        "umf_simulated": umf, "umf_experiment": umf_exp,
+        "relative_error": None if umf is None else (umf - umf_exp) / umf_exp,
+        "plateau_over_weight": plateau / weight,
+        "umf_wen_yu": wen_yu(d_p, p.density),
+        "umf_ergun_at_packed_voidage": ergun_umf(d_p, p.density, 1.0 - 0.6, phi),
+        "bed": f"{p.count} particles in a 0.06 x 0.06 m column, 15 mm cells (shallower than the paper's "
+               "32,500 in 0.15 x 0.15 m; Umf is a property of particles and gas)",
+        "hold_seconds": args.hold, "curve": curve, "plot": str(png),
+        "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
+        "packed_solids_fraction_last": packed,
+    }
+    print(json.dumps(result) if args.json else json.dumps(result, indent=2))
+
+
+def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(velocity, np.asarray(drop) / weight, "o-", label="simulated (defluidization)")
+    u = np.linspace(0, max(velocity), 100)
+    if umf is not None:
+        ax.plot(u, np.minimum(a * u + b * u * u, plateau) / weight, "--", color="grey", label="fixed-bed fit / plateau")
+        ax.axvline(umf, color="tab:red", ls=":", label=f"Umf simulated {umf:.2f} m/s")
+    ax.axvline(umf_exp, color="k", ls="-.", lw=0.8, label=f"Umf experiment {umf_exp} m/s")
+    ax.axhline(1.0, color="k", lw=0.5)
+    ax.set_xlabel("superficial gas velocity U [m/s]")
+    ax.set_ylabel("bed pressure drop / (W/A)")
+    ax.set_title(f"defluidization, {tag}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
