@@ -81,8 +81,12 @@ def _solve_decreasing(function, target: float, upper: float, iterations: int) ->
     """Root of ``function(x) = target`` on x >= 0 for a decreasing ``function`` (bisection; the
     bracket ``[0, upper]`` is doubled until it holds the root)."""
     lo, hi = 0.0, upper
+    doublings = 0
     while function(hi) > target:
         hi *= 2.0
+        doublings += 1
+        if doublings > 12:
+            raise ValueError(f"no damping ratio up to {hi:.3g} reaches the target {target:.3g}")
     for _ in range(iterations):
         mid = 0.5 * (lo + hi)
         if function(mid) > target:
@@ -144,7 +148,12 @@ def calibrated_damping_ratio(restitution: float, step: float, phases: int = 8) -
     def mean_e(zeta):
         return sum(discrete_restitution(zeta, step, ph) for ph in grid) / phases
 
-    return _solve_decreasing(mean_e, restitution, 2.0 * damping_ratio(restitution) + 0.5, 60)
+    try:
+        return _solve_decreasing(mean_e, restitution, 2.0 * damping_ratio(restitution) + 0.5, 60)
+    except ValueError:
+        raise ValueError(f"restitution {restitution:g} cannot be reached with {math.pi / step:.3g} steps per "
+                         "half oscillation of the contact spring: the DEM time step is too large (use at "
+                         "most 1/10 of the collision time)") from None
 
 
 def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tangential_damping_factor,

@@ -85,7 +85,10 @@ class DEMSystem:
         self.gravity = np.asarray(gravity, dtype=np.float64)
         diam = 2.0 * float(particles.radius.min())
         self.skin = float(skin) if skin is not None else 0.1 * diam
-        self.params = contact.parameters(self.dt, float(np.median(particles.mass)))
+        try:
+            self.params = contact.parameters(self.dt, float(np.median(particles.mass)))
+        except ValueError as exc:
+            raise SimulationError(str(exc)) from None
         self.track_orientation = bool(np.any(particles.half_length > 0.0))
         self.implicit_drag = False  # set by the coupling bridge: kicks integrate particles.drag_coefficient
         self._uniform = self._pair_constants(particles)

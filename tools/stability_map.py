@@ -1,0 +1,223 @@
+"""Where each method fails, found by sweeping (issue 7, part 2).
+
+Three maps, each swept rather than assumed, with the boundary found and the theory it should match:
+
+- ``dem``: a head-on binary collision of two seed-000 spheres at DEM steps ``dt = t_c / N``:
+  restitution error and whether the contact is resolved. Theory: velocity Verlet on a linear
+  spring is stable for ``w dt < 2`` (``dt < 2 t_c / pi`` undamped); fvdem refuses ``dt > t_c / 2``
+  outright and a case above ``t_c / 10``.
+- ``drag``: one particle relaxing to its terminal velocity with the drag held over the coupling
+  step (explicit) or integrated implicitly (semi-implicit), at ``dt / tau_p`` from 0.5 to 20,
+  ``tau_p = m / c`` at the terminal state. Theory: explicit (forward Euler) diverges beyond
+  ``dt = 2 m / (dF/dv)``, slightly below ``2 tau_p`` because the drag grows faster than linearly
+  with the slip (``dF/dv = c (1 + dln c / dln v)``); semi-implicit never.
+- ``voidage``: the largest voidage change of a cell while one particle crosses a cell face in small
+  steps, for each voidage method and cell size / particle length. Theory: ``V_p / V_cell``
+  (centroid), ``V_p / (satellites V_cell)`` (divided), continuous (trilinear).
+
+    python tools/stability_map.py --json [--quick]
+
+Writes ``stability_<map>.png`` and prints, as the last line, one JSON object with every point and
+the boundaries found.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from fvdem.coupling import closures
+from fvdem.coupling.bridge import particle_response
+from fvdem.coupling.voidage import voidage
+from fvdem.dem.particles import ParticleArrays
+from fvdem.dem.system import Box, ContactModel, DEMSystem, SimulationError
+from fvdem.gas.mesh import GasMesh
+
+RHO, MU = 1.2, 1.568e-5
+
+
+# --------------------------------------------------------------------------- DEM step vs collision time
+def dem_map(divisors):
+    contact = ContactModel()
+    d = 5.3e-3
+    points = []
+    for n in divisors:
+        particles = ParticleArrays.create(np.array([[0.05, 0.05, 0.05], [0.05 + d * 1.001, 0.05, 0.05]]), d / 2, 0.0,
+                                          1442.0, velocity=np.array([[0.5, 0, 0], [-0.5, 0, 0]]))
+        tc = contact.collision_time(float(particles.mass[0]))
+        dt = tc / n
+        point = {"dt_over_collision_time": 1.0 / n}
+        try:
+            system = DEMSystem(particles, Box((0, 0, 0), (0.1, 0.1, 0.1), (True, True, True)), contact, dt, (0, 0, 0))
+        except SimulationError as exc:
+            point.update(status="refused", reason=str(exc))
+            points.append(point)
+            continue
+        max_overlap = 0.0
+        for _ in range(int(20 * n) + 50):
+            system.step()
+            max_overlap = max(max_overlap, system.diagnostics()["max_overlap_over_diameter"])
+        v = system.particles.velocity[np.argsort(system.particles.ids)]
+        restitution = float((v[1, 0] - v[0, 0]) / 1.0)
+        point.update(status="ran", restitution=restitution, restitution_error=restitution / contact.restitution - 1.0,
+                     max_overlap_over_diameter=max_overlap)
+        points.append(point)
+    ran = [p for p in points if p["status"] == "ran"]
+    accurate = [p["dt_over_collision_time"] for p in ran if abs(p["restitution_error"]) < 0.01]
+    return {"points": points, "largest_dt_within_1_percent": max(accurate) if accurate else None,
+            "refused_above": min((p["dt_over_collision_time"] for p in points if p["status"] == "refused"), default=None),
+            "case_file_limit": 0.1, "theory_undamped_stability": 2 / math.pi}
+
+
+# --------------------------------------------------------------------------- drag treatment vs response time
+def drag_map(ratios, steps=200):
+    """Particle (20 um sphere) starting at rest in still gas; drag linearised at its terminal state.
+    Explicit: v_{k+1} = v_k + dt (g - c v_k / m) with c from the closure at the current slip;
+    semi-implicit: the kicks' closed form with the same c (what fvdem's kicks do)."""
+    d = 2e-5
+    m = 1442.0 * math.pi / 6 * d ** 3
+
+    def coefficient(speed):
+        return float(closures.single_particle_drag_coefficient(np.array([[0, 0, max(speed, 1e-12)]]), 1.0, d, RHO, MU)[0])
+
+    v_t = m * 9.81 / coefficient(0.0)
+    for _ in range(50):
+        v_t = m * 9.81 / coefficient(v_t)
+    tau = m / coefficient(v_t)
+    points = []
+    for ratio in ratios:
+        dt = ratio * tau
+        result = {"dt_over_response_time": ratio}
+        for scheme in ("explicit", "semi-implicit"):
+            v = 0.0
+            for _ in range(steps):
+                c = coefficient(abs(v))
+                if scheme == "explicit":
+                    v = v + dt * (9.81 - c * v / m)
+                else:
+                    one_minus_r, k = particle_response(np.array([m]), np.array([c]), dt / 10, 10)
+                    v = v + one_minus_r[0] * (0.0 - v) + 9.81 * k[0] * dt + 9.81 * dt  # v0 + (J + m g dt) / m
+                if not math.isfinite(v) or abs(v) > 1e6 * v_t:
+                    break
+            error = abs(v / v_t - 1.0) if math.isfinite(v) else float("inf")
+            # it starts at rest (error 1): stable if the error has shrunk, unstable if it has grown
+            result[scheme] = {"final_error": error, "stable": bool(error < 1.0)}
+        points.append(result)
+    explicit_unstable = [p["dt_over_response_time"] for p in points if not p["explicit"]["stable"]]
+    return {"points": points, "response_time": tau, "terminal_velocity": v_t,
+            "explicit_unstable_from": min(explicit_unstable) if explicit_unstable else None,
+            "semi_implicit_unstable_from": min((p["dt_over_response_time"] for p in points
+                                                if not p["semi-implicit"]["stable"]), default=None),
+            "theory_explicit": 2.0}
+
+
+# --------------------------------------------------------------------------- voidage jumps
+def voidage_map(cell_over_length, samples=200):
+    """AR-4 rod (d 3 mm, L 12 mm) moved along x across a cell face, axis along x."""
+    diameter, length = 3e-3, 12e-3
+    points = []
+    for ratio in cell_over_length:
+        cell = ratio * length
+        mesh = GasMesh.box((4, 1, 1), (0, 0, 0), (4 * cell, cell, cell))
+        volume = math.pi / 4 * diameter ** 2 * (length - diameter) + math.pi / 6 * diameter ** 3
+        for method in ("centroid", "divided", "trilinear"):
+            path = np.linspace(1.0 * cell, 3.0 * cell, samples)
+            previous, largest = None, 0.0
+            for x in path:
+                particles = ParticleArrays.create(np.array([[x, 0.5 * cell, 0.5 * cell]]), diameter / 2,
+                                                  (length - diameter) / 2, 1442.0, axis=np.array([[1.0, 0, 0]]))
+                eps, _ = voidage(particles, mesh, method, minimum=0.0)
+                if previous is not None:
+                    largest = max(largest, float(np.abs(eps - previous).max()))
+                previous = eps
+            step_change = volume / cell ** 3 * (path[1] - path[0]) / cell  # what smooth motion alone changes
+            points.append({"cell_over_length": ratio, "method": method,
+                           "largest_jump_over_particle_fraction": largest / (volume / cell ** 3),
+                           "smooth_limit": step_change / (volume / cell ** 3)})
+    return {"points": points,
+            "theory": {"centroid": 1.0, "divided": 0.2, "trilinear": "continuous (jump -> 0 with the step)"}}
+
+
+# --------------------------------------------------------------------------- plots and main
+def _plots(out, dem, drag, void):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    paths = []
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    ran = [p for p in dem["points"] if p["status"] == "ran"]
+    ax.semilogx([p["dt_over_collision_time"] for p in ran], [100 * abs(p["restitution_error"]) for p in ran], "o-")
+    for p in dem["points"]:
+        if p["status"] == "refused":
+            ax.axvspan(p["dt_over_collision_time"], 1.0, color="tab:red", alpha=0.15)
+    ax.axvline(0.1, color="k", ls=":", label="case-file limit t_c/10")
+    ax.set_xlabel("DEM step / collision time")
+    ax.set_ylabel("restitution error [%]")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    paths.append(Path(out) / "stability_dem.png")
+    fig.savefig(paths[-1], dpi=120)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    ratios = [p["dt_over_response_time"] for p in drag["points"]]
+    for scheme, marker in (("explicit", "s"), ("semi-implicit", "o")):
+        errors = [min(p[scheme]["final_error"], 1e6) for p in drag["points"]]
+        ax.loglog(ratios, np.maximum(errors, 1e-16), marker + "-", label=scheme)
+    ax.axvline(2.0, color="k", ls=":", label="theory: explicit unstable beyond 2")
+    ax.set_xlabel("coupling step / particle response time")
+    ax.set_ylabel("|v / v_t - 1| after 200 steps (from rest: 1)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    paths.append(Path(out) / "stability_drag.png")
+    fig.savefig(paths[-1], dpi=120)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    for method in ("centroid", "divided", "trilinear"):
+        pts = [p for p in void["points"] if p["method"] == method]
+        ax.plot([p["cell_over_length"] for p in pts], [p["largest_jump_over_particle_fraction"] for p in pts],
+                "o-", label=method)
+    ax.set_xlabel("cell size / particle length")
+    ax.set_ylabel("largest voidage jump / (V_p / V_cell)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    paths.append(Path(out) / "stability_voidage.png")
+    fig.savefig(paths[-1], dpi=120)
+    plt.close(fig)
+    return [str(p) for p in paths]
+
+
+def run(quick=False, out="."):
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    divisors = [50, 14, 10, 5, 3, 2.2, 1.9, 1.5] if not quick else [14, 3, 1.9]
+    ratios = [0.5, 1.0, 1.5, 1.8, 1.95, 2.05, 2.2, 3.0, 5.0, 10.0, 20.0] if not quick else [0.5, 1.9, 2.1, 5.0]
+    lengths = [0.75, 1.25, 2.0, 3.0] if not quick else [1.25]
+    dem, drag, void = dem_map(divisors), drag_map(ratios), voidage_map(lengths, 200 if not quick else 60)
+    plots = _plots(out, dem, drag, void)
+    return {"dem": dem, "drag": drag, "voidage": void, "plots": plots,
+            "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer points (a smoke test, seconds)")
+    parser.add_argument("--out", default=".")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    result = run(args.quick, args.out)
+    d = result["drag"]
+    print(f"explicit drag unstable from dt/tau = {d['explicit_unstable_from']} (theory 2); semi-implicit: "
+          f"{d['semi_implicit_unstable_from'] or 'stable everywhere'}", flush=True)
+    print(json.dumps(result) if args.json else json.dumps(result, indent=2))
+
+
+if __name__ == "__main__":
+    main()
