@@ -178,6 +178,10 @@ class GasConfig:
     linear_solver: str = spec("iterative", kind="str", choices=("iterative", "direct"))
     linear_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0, doc="relative tolerance of the linear solves")
     body_force: tuple = spec((0.0, 0.0, 0.0), kind="vec3", doc="body force on the gas [N/m^3] (drives a periodic box)")
+    mean_pressure_gradient: tuple = spec((0.0, 0.0, 0.0), kind="vec3",
+                                         doc="imposed -<grad p> [Pa/m] of a periodic box, acting on both phases: "
+                                             "eps G per volume on the fluid, V_p G on each particle (e.g. G = "
+                                             "mixture density x |g| upwards holds up a suspension)")
     porous_zone: PorousZoneConfig = section(PorousZoneConfig)
 
 
@@ -373,6 +377,9 @@ def _gas_checks(case: Case, problems: list) -> None:
     if any(periodic) and not all(periodic):
         problems.append(f"domain.periodic = {list(periodic)}: with the gas phase the box is periodic on all axes "
                         "or on none")
+    if any(g.mean_pressure_gradient) and not all(periodic):
+        problems.append(f"gas.mean_pressure_gradient = {list(g.mean_pressure_gradient)}: only for a fully periodic "
+                        "box (a walled column has its own pressure)")
     if all(periodic) and g.inlet_velocity > 0:
         problems.append(f"gas.inlet_velocity = {g.inlet_velocity:g}: a periodic box has no inlet")
     if case.particles.count > 0:

@@ -160,6 +160,40 @@ def test_total_momentum_in_a_closed_periodic_box_changes_by_the_external_forces_
     assert errors.max() < 1e-9 * exchanged.max()
 
 
+def test_force_balanced_periodic_suspension_keeps_its_momentum_to_round_off():
+    """Seed 004's set-up in miniature: a periodic liquid-particle box held up by a mean pressure
+    gradient equal to the mixture weight (G = rho_mix g on both phases): the external forces sum to
+    zero, so the total momentum must not change while the particles settle against the liquid."""
+    rho_l, rho_p, n, d = 1000.0, 2000.0, 40, 2e-3
+    size = (0.02, 0.02, 0.04)
+    phi = n * np.pi / 6 * d ** 3 / np.prod(size)
+    mixture = phi * rho_p + (1 - phi) * rho_l
+    case = case_from_dict({
+        "domain": {"upper": list(size), "periodic": [True, True, True]},
+        "particles": {"count": n, "diameter": d, "density": rho_p, "insertion": {"seed": 8}},
+        "contact": {"normal_stiffness": 50.0},
+        "gas": {"enabled": True, "cells": [4, 4, 8], "cfd_step": 2e-4, "density": rho_l, "viscosity": 1e-3,
+                "mean_pressure_gradient": [0.0, 0.0, mixture * 9.81], "scheme": "simple", "linear_solver": "direct"},
+        "coupling": {"voidage": "trilinear"},
+        "time": {"dem_step": 2e-5, "end": 1.0},
+        "output": {"progress": False}})
+    sim = fvdem.Simulation(case)
+    sim.gas.solver.tolerance = 1e-13
+    s, mesh = sim.gas.solver, sim.gas.mesh
+
+    def momentum():
+        p = sim.particles
+        return (p.mass[:, None] * p.velocity).sum(axis=0) + \
+            (rho_l * s.voidage[:, None] * mesh.cell_volumes[:, None] * s.velocity).sum(axis=0)
+
+    start = momentum()
+    sim.run(40 * 2e-4)
+    settling = -np.mean(sim.particles.velocity[:, 2])
+    scale = sim.particles.mass.sum() * settling
+    assert settling > 1e-4  # the particles do settle through the liquid
+    np.testing.assert_allclose(momentum(), start, atol=1e-9 * scale)
+
+
 # --------------------------------------------------------------------------- fixed bed and held particle
 def _fixed_bed_case(tmp_path, positions, diameter, inlet, cells, upper, cfd_step=0.02, **coupling):
     particles = ParticleArrays.create(np.asarray(positions, float), 0.5 * diameter, 0.0, 1442.0)

@@ -184,6 +184,8 @@ class CouplingBridge:
         external = np.zeros_like(slip)
         if cfg.pressure_gradient_force:
             external -= self.particle_volume()[:, None] * grid_map.gather(s._pressure_gradient(s.pressure))
+        if np.any(gas.mean_pressure_gradient):  # an imposed mean gradient acts on both phases
+            external += self.particle_volume()[:, None] * gas.mean_pressure_gradient
         pressure_force = external.sum(axis=0)
         if lift is not None:
             external += lift

@@ -37,6 +37,7 @@ class GasPhase:
         self.exchange_beta = np.zeros(n)  # set by the coupling bridge [kg/(m^3 s)]
         self.exchange_source = np.zeros((n, 3))  # [N/m^3]
         self._body_force = np.asarray(g.body_force, float)
+        self.mean_pressure_gradient = np.asarray(g.mean_pressure_gradient, float)
 
     def set_voidage(self, voidage, previous=None) -> None:
         """New particle voidage for the next step; the current one becomes the old level of the
@@ -63,7 +64,7 @@ class GasPhase:
         s = self.solver
         s.beta[:] = self.exchange_beta
         self._update_porous_zone()
-        s.source[:] = self._body_force + self.exchange_source
+        s.source[:] = self._body_force + s.voidage[:, None] * self.mean_pressure_gradient + self.exchange_source
         info = s.step(self.dt)
         s.voidage_old[:] = s.voidage
         self.step_count += 1
