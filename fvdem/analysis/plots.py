@@ -134,14 +134,59 @@ def plot_mixing(runs, path, level=0.95) -> Path:
     return _save(fig, Path(path))
 
 
+def plot_void_fraction_histogram(out, below=0.3) -> Path:
+    """Histogram of the cell voidage below ``below`` [m] over all gas snapshots (seed 000 Fig. 7)."""
+    import meshio
+    from .mixing import void_fraction_histogram
+    plt = _pyplot()
+    values, centres = [], None
+    for path in sorted(Path(out).glob("gas_*.vtu"))[1:]:  # the first snapshot is the initial state
+        grid = meshio.read(path)
+        centres = grid.points[grid.cells[0].data].mean(axis=1)
+        values.append(grid.cell_data["voidage"][0])
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    if values:
+        counts, edges = void_fraction_histogram(np.concatenate(values), np.tile(centres, (len(values), 1)), below)
+        ax.bar(0.5 * (edges[1:] + edges[:-1]), counts, width=np.diff(edges), edgecolor="k", lw=0.4)
+    ax.set_xlabel("cell void fraction")
+    ax.set_ylabel("probability density")
+    ax.set_title(f"cells below z = {below} m, {len(values)} snapshots")
+    ax.grid(alpha=0.3)
+    return _save(fig, Path(out) / "void_fraction.png")
+
+
+def plot_orientation(out, state_file="final_state.npz") -> Path:
+    """Distribution of the angle between particle axes and the vertical against the random
+    orientation's sin(angle)."""
+    from .mixing import orientation_angles
+    plt = _pyplot()
+    with np.load(Path(out) / state_file) as data:
+        angles = orientation_angles(data["axis"])
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    ax.hist(np.degrees(angles), bins=18, range=(0, 90), density=True, edgecolor="k", lw=0.4, label="particles")
+    phi = np.linspace(0, 90, 91)
+    ax.plot(phi, np.sin(np.radians(phi)) * np.pi / 180, "k--", label="random: sin(angle)")
+    ax.set_xlabel("angle between axis and vertical [deg]")
+    ax.set_ylabel("probability density [1/deg]")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return _save(fig, Path(out) / "orientation.png")
+
+
 def report(out) -> list:
     """All plots a run folder supports; returns the written paths."""
     out = Path(out)
     paths = [plot_timeseries(out)]
     if (out / "final_state.npz").exists():
         paths.append(plot_colour_slice(out))
+        with np.load(out / "final_state.npz") as data:
+            rods = bool(np.any(data["half_length"] > 0))
+        if rods:
+            paths.append(plot_orientation(out))
     if any(out.glob("gas_*.vtu")):
         paths.append(plot_gas_profile(out))
+        if len(list(out.glob("gas_*.vtu"))) > 1:
+            paths.append(plot_void_fraction_histogram(out))
     if "mixing_entropy" in read_timeseries(out):
         paths.append(plot_mixing([out], out / "mixing.png"))
     return paths
