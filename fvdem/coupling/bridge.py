@@ -191,26 +191,19 @@ class CouplingBridge:
             external += lift
         if explicit_drag is not None:
             external += explicit_drag
-        if explicit_drag is not None:
-            impulse = None  # the held force is what both sides exchanged
-        elif self.fixed:
-            impulse = c[:, None] * fluid_velocity * dt
+        if self.fixed:  # nothing moves: the particles receive the drag at the new gas velocity
+            impulse = None if explicit_drag is not None else c[:, None] * fluid_velocity * dt
         else:
             p.external_force[:] = external
             p.external_torque[:] = 0.0 if torque is None else torque
-            p.drag_coefficient[:] = c
+            p.drag_coefficient[:] = c if self.semi_implicit else 0.0
             p.fluid_velocity[:] = fluid_velocity
             p.drag_impulse[:] = 0.0
             ids_before = p.ids.copy()
             dem.step(self.substeps)
             p = dem.particles
-            impulse = _in_order(p.drag_impulse, p.ids, ids_before)
-        if explicit_drag is not None and not self.fixed:
-            p.external_force[:] = external
-            p.external_torque[:] = 0.0 if torque is None else torque
-            p.drag_coefficient[:] = 0.0
-            p.fluid_velocity[:] = fluid_velocity
-            dem.step(self.substeps)
+            # explicit: the held force is what both sides exchanged; semi-implicit: what the kicks applied
+            impulse = None if explicit_drag is not None else _in_order(p.drag_impulse, p.ids, ids_before)
         returned = 0.0
         if impulse is not None and cfg.two_way:
             # the gas lost V (beta u - S) dt per cell (u its momentum velocity); the particles gained
