@@ -22,7 +22,7 @@ test: $(STAMP)
 demo: $(STAMP)
 	$(BIN)/fvdem run cases/demo.toml --out demo_out --overwrite
 	$(BIN)/fvdem report demo_out
-	@echo "demo written to demo_out/: timeseries.png, colours.png, mixing.png, gas_profile.png;"
+	@echo "demo written to demo_out/: timeseries.png, colours.png, mixing.png, gas_profile.png, void_fraction.png;"
 	@echo "open demo_out/particles.pvd and demo_out/gas.pvd in ParaView"
 
 bench: $(STAMP)
