@@ -11,49 +11,24 @@ import numba
 import numpy as np
 from numba import njit
 
+NEAREST, TRILINEAR = 0, 1
+
 
 @njit(cache=True)
 def trilinear(field, points, first_centre, spacing, shape, periodic, out):
     """Interpolate ``field`` (C, k) given in FiPy cell order (x fastest) to ``points`` (N, 3) into
-    ``out`` (N, k)."""
-    nx, ny = shape[0], shape[1]
+    ``out`` (N, k), with the 8 cell/weight pairs of ``_point_weights``."""
     k = field.shape[1]
+    cells = np.empty(8, np.int64)
+    weights = np.empty(8)
     for p in range(points.shape[0]):
-        lo = np.empty(3, np.int64)
-        hi = np.empty(3, np.int64)
-        w = np.empty(3)
-        for d in range(3):
-            t = (points[p, d] - first_centre[d]) / spacing[d]
-            n = shape[d]
-            i0 = int(np.floor(t))
-            f = t - i0
-            if periodic[d]:
-                lo[d] = i0 % n
-                hi[d] = (i0 + 1) % n
-                w[d] = f
-            elif i0 < 0:
-                lo[d] = 0
-                hi[d] = 0
-                w[d] = 0.0
-            elif i0 >= n - 1:
-                lo[d] = n - 1
-                hi[d] = n - 1
-                w[d] = 0.0
-            else:
-                lo[d] = i0
-                hi[d] = i0 + 1
-                w[d] = f
+        _point_weights(points[p, 0], points[p, 1], points[p, 2], 1.0, TRILINEAR, first_centre, spacing, shape,
+                       periodic, cells, weights, 0)
         for c in range(k):
-            out[p, c] = 0.0
-        for corner in range(8):
-            ix = hi[0] if corner & 1 else lo[0]
-            iy = hi[1] if corner & 2 else lo[1]
-            iz = hi[2] if corner & 4 else lo[2]
-            weight = ((w[0] if corner & 1 else 1.0 - w[0]) * (w[1] if corner & 2 else 1.0 - w[1])
-                      * (w[2] if corner & 4 else 1.0 - w[2]))
-            cell = ix + nx * (iy + ny * iz)
-            for c in range(k):
-                out[p, c] += weight * field[cell, c]
+            total = 0.0
+            for j in range(8):
+                total += weights[j] * field[cells[j], c]
+            out[p, c] = total
     return out
 
 
@@ -69,7 +44,6 @@ def interpolate(mesh, field, points):
 
 
 # --------------------------------------------------------------------------- particle <-> cell weights
-NEAREST, TRILINEAR = 0, 1
 
 
 @njit(cache=True)
