@@ -151,8 +151,9 @@ class Simulation:
         # intervals) when the gas is on and coupled, or without particles
         has_particles = case.particles.count > 0
         self.coupled = has_particles and case.gas.enabled and case.coupling.enabled
-        by_cfd_step = self.coupled or not has_particles
-        dt = case.gas.cfd_step if by_cfd_step else case.time.dem_step
+        # fixed particles never move: only the gas steps (the case refuses them without gas)
+        self._gas_steps_only = not has_particles or (case.particles.fixed and not self.coupled)
+        dt = case.gas.cfd_step if self.coupled or self._gas_steps_only else case.time.dem_step
         self._dt = dt
         self._cfd_every = max(1, round(case.gas.cfd_step / case.time.dem_step)) if has_particles else 1
         self.gas = GasPhase(case) if case.gas.enabled else None
@@ -203,7 +204,7 @@ class Simulation:
     @property
     def step_count(self) -> int:
         """Steps of the loop: CFD steps in a coupled or gas-only case, else DEM steps."""
-        if self.coupled or self.dem is None or (self.case.particles.fixed and self.gas is not None):
+        if self.coupled or self._gas_steps_only:
             return self.gas.step_count
         return self.dem.step_count
 
@@ -217,18 +218,16 @@ class Simulation:
         return self._dt
 
     def _advance(self, steps: int) -> None:
-        """Advance ``steps`` loop steps: coupling intervals (``CouplingBridge.advance``), gas steps, or
-        DEM steps; uncoupled gas and particles take a gas step every ``cfd_step / dem_step`` DEM steps."""
+        """Advance ``steps`` loop steps: coupling intervals (``CouplingBridge.advance``), gas steps (no
+        particles, or fixed uncoupled ones), or DEM steps; uncoupled gas and moving particles take a
+        gas step every ``cfd_step / dem_step`` DEM steps."""
         if self.coupled:
             for _ in range(steps):
                 self.bridge.advance()
             return
-        if self.dem is None or (self.case.particles.fixed and self.gas is not None):
+        if self._gas_steps_only:
             for _ in range(steps):
                 self.gas.step()
-            return
-        if self.case.particles.fixed:
-            self.dem.step_count += steps  # nothing moves
             return
         if self.gas is None:
             self.dem.step(steps)
