@@ -19,7 +19,7 @@ import numba
 import numpy as np
 
 from .analysis.bed import bed_top, packed_bed_summary
-from .analysis.mixing import lacey_index, mixing_entropy, mixing_time
+from .analysis.mixing import mixing_indices, mixing_time
 from .case import Case, CaseError, to_toml
 from .coupling.bridge import CouplingBridge
 from .dem.insertion import insert_particles
@@ -251,8 +251,8 @@ class Simulation:
         diag["bed_top"] = bed_top(p.position, p.axis, p.radius, p.half_length)
         if self.two_colours:
             lo, hi = self.case.domain.lower, self.case.domain.upper
-            diag["mixing_entropy"] = mixing_entropy(p.position, p.colour, lo, hi, self.mixing_cells)
-            diag["lacey_index"] = lacey_index(p.position, p.colour, lo, hi, self.mixing_cells)
+            diag["mixing_entropy"], diag["lacey_index"] = mixing_indices(p.position, p.colour, lo, hi,
+                                                                         self.mixing_cells)
         if self.bridge is not None:
             diag.update(self.bridge.diagnostics())
             if "bed_pressure_drop" in diag:

@@ -144,9 +144,8 @@ def voidage_map(cell_over_length, samples=200):
 
 # --------------------------------------------------------------------------- plots and main
 def _plots(out, dem, drag, void):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from fvdem.analysis.plots import _pyplot, _save
+    plt = _pyplot()
     paths = []
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     ran = [p for p in dem["points"] if p["status"] == "ran"]
@@ -159,10 +158,7 @@ def _plots(out, dem, drag, void):
     ax.set_ylabel("restitution error [%]")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    paths.append(Path(out) / "stability_dem.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
+    paths.append(_save(fig, Path(out) / "stability_dem.png"))
 
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     ratios = [p["dt_over_response_time"] for p in drag["points"]]
@@ -174,10 +170,7 @@ def _plots(out, dem, drag, void):
     ax.set_ylabel("|v / v_t - 1| after 200 steps (from rest: 1)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    paths.append(Path(out) / "stability_drag.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
+    paths.append(_save(fig, Path(out) / "stability_drag.png"))
 
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     for method in ("centroid", "divided", "trilinear"):
@@ -188,10 +181,7 @@ def _plots(out, dem, drag, void):
     ax.set_ylabel("largest voidage jump / (V_p / V_cell)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    paths.append(Path(out) / "stability_voidage.png")
-    fig.savefig(paths[-1], dpi=120)
-    plt.close(fig)
+    paths.append(_save(fig, Path(out) / "stability_voidage.png"))
     return [str(p) for p in paths]
 
 

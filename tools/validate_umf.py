@@ -158,9 +158,8 @@ def main(argv=None):
 
 
 def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from fvdem.analysis.plots import _pyplot, _save
+    plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot(velocity, np.asarray(drop) / weight, "o-", label="simulated (defluidization)")
     u = np.linspace(0, max(velocity), 100)
@@ -174,9 +173,7 @@ def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag):
     ax.set_title(f"defluidization, {tag}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    _save(fig, path)
 
 
 if __name__ == "__main__":

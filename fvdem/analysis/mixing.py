@@ -28,30 +28,33 @@ def _cell_counts(position, colour, lower, upper, cells):
     return total, ones
 
 
-def mixing_entropy(position, colour, lower, upper, cells=(5, 5, 35)) -> float:
-    """Normalised mixing entropy S_tot (Eqs. 34-35) of particles with colours 0/1 [dimensionless]."""
+def mixing_indices(position, colour, lower, upper, cells=(5, 5, 35)):
+    """``(S_tot, Lacey index)`` of particles with colours 0/1 from one binning into the analysis grid."""
     total, ones = _cell_counts(position, colour, lower, upper, cells)
     occupied = total > 0
-    x1 = ones[occupied] / total[occupied]
+    n_cell = total[occupied]
+    x1 = ones[occupied] / n_cell
     x0 = 1.0 - x1
     with np.errstate(divide="ignore", invalid="ignore"):
         s = -np.where(x1 > 0, x1 * np.log(x1), 0.0) - np.where(x0 > 0, x0 * np.log(x0), 0.0)
-    return float((s * total[occupied]).sum() / total.sum() / np.log(2.0))
+    entropy = float((s * n_cell).sum() / total.sum() / np.log(2.0))
+    p = ones.sum() / total.sum()
+    if p in (0.0, 1.0):
+        return entropy, float("nan")
+    variance = float(np.sum(n_cell * (x1 - p) ** 2) / n_cell.sum())
+    s0 = p * (1 - p)
+    s_random = s0 / n_cell.mean()
+    return entropy, (s0 - variance) / (s0 - s_random)
+
+
+def mixing_entropy(position, colour, lower, upper, cells=(5, 5, 35)) -> float:
+    """Normalised mixing entropy S_tot (Eqs. 34-35) of particles with colours 0/1 [dimensionless]."""
+    return mixing_indices(position, colour, lower, upper, cells)[0]
 
 
 def lacey_index(position, colour, lower, upper, cells=(5, 5, 35)) -> float:
     """Lacey mixing index (0 segregated, 1 random mixture) on the same analysis grid."""
-    total, ones = _cell_counts(position, colour, lower, upper, cells)
-    occupied = total > 0
-    n_cell = total[occupied]
-    fraction = ones[occupied] / n_cell
-    p = ones.sum() / total.sum()
-    if p in (0.0, 1.0):
-        return float("nan")
-    variance = float(np.sum(n_cell * (fraction - p) ** 2) / n_cell.sum())
-    s0 = p * (1 - p)
-    s_random = s0 / n_cell.mean()
-    return (s0 - variance) / (s0 - s_random)
+    return mixing_indices(position, colour, lower, upper, cells)[1]
 
 
 def mixing_time(times, entropy, level: float = 0.95):

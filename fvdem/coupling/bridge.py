@@ -182,10 +182,11 @@ class CouplingBridge:
         gas.step()
         fluid_velocity = grid_map.gather(s.flux_velocity())
         external = np.zeros_like(slip)
+        volume = self.particle_volume()[:, None]
         if cfg.pressure_gradient_force:
-            external -= self.particle_volume()[:, None] * grid_map.gather(s._pressure_gradient(s.pressure))
+            external -= volume * grid_map.gather(s._pressure_gradient(s.pressure))
         if np.any(gas.mean_pressure_gradient):  # an imposed mean gradient acts on both phases
-            external += self.particle_volume()[:, None] * gas.mean_pressure_gradient
+            external += volume * gas.mean_pressure_gradient
         pressure_force = external.sum(axis=0)
         if lift is not None:
             external += lift

@@ -85,29 +85,28 @@ class GasPhase:
     def diagnostics(self) -> dict:
         s = self.solver
         z = self.mesh.cell_centers[:, 2]
-        diag = {"gas_max_speed": float(np.linalg.norm(s.velocity, axis=1).max()),
-                "gas_inlet_pressure": self.plane_pressure(z.min())}
+        first = self.plane_pressure(z.min())
+        diag = {"gas_max_speed": float(np.linalg.norm(s.velocity, axis=1).max()), "gas_inlet_pressure": first}
         if not s.periodic:
             # pressure drop from the inlet face (extrapolated as the solver's gradient takes it) to
             # the last cell layer, less the gas head: what the particles (and wall friction) hold up [Pa]
-            first = self.plane_pressure(z.min())
             inlet = first + 0.5 * (first - self.plane_pressure(z.min() + self.mesh.spacing[2]))
             inlet_height = z.min() - 0.5 * self.mesh.spacing[2]
             diag["bed_pressure_drop"] = (inlet - self.plane_pressure(z.max())
                                          + self.config.density * s.gravity[2] * (z.max() - inlet_height))
         if self.zone.any():
-            z = self.config.porous_zone
-            lo, hi = z.lower[2], z.upper[2]
+            zone = self.config.porous_zone
+            lo, hi = zone.lower[2], zone.upper[2]
             inset = 0.25 * (hi - lo)
             a, b = lo + inset, hi - inset
             diag["porous_zone_pressure_gradient"] = ((self.plane_pressure(a) - self.plane_pressure(b))
                                                      / (self.layer_height(b) - self.layer_height(a)))
             u = self.config.inlet_velocity
-            solids = 1.0 - z.voidage
+            solids = 1.0 - zone.voidage
             diag["ergun_pressure_gradient"] = (150 * solids ** 2 * self.config.viscosity * u
-                                               / (z.voidage ** 3 * z.particle_diameter ** 2)
+                                               / (zone.voidage ** 3 * zone.particle_diameter ** 2)
                                                + 1.75 * solids * self.config.density * u ** 2
-                                               / (z.voidage ** 3 * z.particle_diameter))
+                                               / (zone.voidage ** 3 * zone.particle_diameter))
             # the measured gradient also carries the gas's own weight: -dp/dz = beta u / eps - rho g_z
             diag["expected_pressure_gradient"] = (diag["ergun_pressure_gradient"]
                                                   - self.config.density * self.solver.gravity[2])
