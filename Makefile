@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test venv clean bench clean-cache
+.PHONY: demo test venv clean bench clean-cache smoke
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -29,7 +29,13 @@ bench: $(STAMP)
 	$(BIN)/python tools/bench_dem.py --json
 
 clean:
-	rm -rf $(VENV) build *.egg-info demo_out
+	rm -rf $(VENV) build *.egg-info demo_out smoke_out
 
 clean-cache:  # numba caches are invalidated only by edits to a kernel's own file
 	find fvdem -name '*.nbi' -delete -o -name '*.nbc' -delete
+
+smoke: $(STAMP)  # the validation tools' quick modes (CI runs them after the tests)
+	mkdir -p smoke_out
+	$(BIN)/python tools/stability_map.py --quick --json --out smoke_out
+	$(BIN)/python tools/speed_accuracy.py --quick --json --out smoke_out
+	$(BIN)/python tools/validate_hindered_settling.py --quick --aspect-ratio 2 --ga-e 1296 --json --out smoke_out

@@ -72,6 +72,10 @@ class InsertionConfig:
                             doc="axis orientation of inserted spherocylinders")
     gap: float = spec(0.0, unit="length", ge=0.0, doc="extra clearance between inserted particles [m]")
     seed: int = spec(1, kind="int", ge=0, doc="random seed")
+    method: str = spec("sequential", kind="str", choices=("sequential", "compress"),
+                        doc="'sequential': random sequential insertion (up to a solids fraction of about 0.35 of "
+                            "the region); 'compress': fully periodic boxes only, insertion into a larger box "
+                            "compressed to the domain (random packings up to 0.55)")
 
 
 @dataclass(frozen=True)
@@ -117,7 +121,9 @@ class ParticlesConfig:
 
 @dataclass(frozen=True)
 class ContactConfig:
-    normal_stiffness: float = spec(2.0e4, unit="stiffness", gt=0.0, doc="linear normal spring k_n [N/m]")
+    normal_stiffness: float = spec(800.0, unit="stiffness", gt=0.0,
+                                   doc="linear normal spring k_n [N/m] (default from the speed-accuracy front, "
+                                       "docs/speed-accuracy.md; seed 000: 2e4 with dem_step 1e-5)")
     restitution: float = spec(0.43, gt=0.0, le=1.0, doc="coefficient of restitution e in (0, 1]")
     friction: float = spec(0.46, ge=0.0, doc="sliding friction coefficient mu")
     rolling_friction: float = spec(0.46, ge=0.0, doc="rolling friction coefficient mu_r (CDT model)")
@@ -129,7 +135,9 @@ class ContactConfig:
 
 @dataclass(frozen=True)
 class TimeConfig:
-    dem_step: float = spec(1.0e-5, unit="time", gt=0.0, doc="DEM time step [s]")
+    dem_step: float = spec(5.0e-5, unit="time", gt=0.0,
+                           doc="DEM time step [s] (default: 1/14 of the default spring's collision time for seed "
+                               "000's particles; seed 000: 1e-5)")
     end: float = spec(0.1, unit="time", gt=0.0, doc="simulated end time [s]")
     stop_when_settled: bool = spec(False, kind="bool", doc="end early once the bed is at rest")
     settled_speed: float = spec(0.005, unit="velocity", gt=0.0,
@@ -172,7 +180,9 @@ class GasConfig:
                              doc="minimum fluidization velocity [m/s] that u_over_umf refers to (seed 000: "
                                  "1.58 m/s AR-1, 1.7 m/s AR-4)")
     walls: str = spec("no-slip", kind="str", choices=("no-slip", "free-slip"), doc="side-wall condition")
-    cfd_step: float = spec(1.0e-4, unit="time", gt=0.0, doc="CFD time step [s]")
+    cfd_step: float = spec(5.0e-4, unit="time", gt=0.0,
+                           doc="CFD time step [s] = coupling interval (default from the speed-accuracy front; "
+                               "seed 000: 1e-4)")
     scheme: str = spec("piso", kind="str", choices=("piso", "simple"), doc="pressure-velocity coupling")
     correctors: int = spec(2, kind="int", ge=1, doc="PISO pressure corrections per step")
     linear_solver: str = spec("iterative", kind="str", choices=("iterative", "direct"))
@@ -208,6 +218,36 @@ class CouplingConfig:
                                    "stable for any step; 'explicit': the drag force at the coupling time held "
                                    "over the CFD step (unstable beyond 2 particle response times)")
     two_way: bool = spec(True, kind="bool", doc="feed the particle forces back into the gas (false: one-way coupling)")
+    rotational_drag: str = spec("none", kind="str", choices=("none", "stokes"),
+                                doc="viscous resistance to particle rotation: 'stokes' applies pi mu d_e^3 omega "
+                                    "(the volume-equivalent sphere's), integrated exactly over the CFD step; "
+                                    "negligible in a gas, it sets the orientations of rods in a liquid")
+
+
+@dataclass(frozen=True)
+class SuspensionConfig:
+    enabled: bool = spec(False, kind="bool",
+                         doc="set the case up from seed 004's dimensionless scene: a fully periodic box of "
+                             "liquid and identical particles held up by a mean pressure gradient (derives "
+                             "domain, particles, liquid, gradient, contact stiffness and steps)")
+    particle: str = spec("cylinder", kind="str", choices=("cylinder", "sphere"),
+                         doc="'cylinder': seed 004's flat-ended cylinder of aspect ratio l/d, modelled as the "
+                             "spherocylinder of equal diameter and volume (length l + d/3); 'sphere': diameter d")
+    aspect_ratio: float = spec(2.0, gt=2.0 / 3.0, le=10.0, doc="cylinder length over diameter l/d")
+    density_ratio: float = spec(2.0, gt=1.0, doc="particle over liquid density gamma")
+    galileo: float | None = spec(None, gt=0.0, optional=True, doc="Ga = g d^3 / nu^2 on the diameter d")
+    galileo_equivalent: float | None = spec(None, gt=0.0, optional=True,
+                                            doc="Ga_e = g d_e^3 / nu^2 on the volume-equivalent diameter "
+                                                "d_e = (3 l d^2 / 2)^(1/3)")
+    solids_fraction: float = spec(0.2, gt=0.0, le=0.55, doc="mean solids volume fraction <phi>")
+    box: tuple = spec((9.0, 9.0, 18.0), kind="vec3", doc="box size in diameters d (seed 004: 9 x 9 x 18)")
+    cells: tuple = spec((3, 3, 6), kind="int3", ge=1, doc="liquid grid cells along x, y, z")
+    diameter: float = spec(1.0e-3, unit="length", gt=0.0, doc="particle diameter d [m]: sets the dimensional scale")
+    liquid_density: float = spec(1000.0, unit="density", gt=0.0, doc="liquid density rho [kg/m^3]")
+    duration: float = spec(20.0, gt=0.0, doc="simulated time in viscous times d^2 / nu")
+    overlap: float = spec(0.02, gt=0.0, lt=0.2,
+                          doc="contact stiffness: largest overlap / d of a head-on collision at the "
+                              "gravitational velocity sqrt((gamma - 1) g d_e)")
 
 
 @dataclass(frozen=True)
@@ -226,6 +266,7 @@ class Case:
     output: OutputConfig = section(OutputConfig)
     gas: GasConfig = section(GasConfig)
     coupling: CouplingConfig = section(CouplingConfig)
+    suspension: SuspensionConfig = section(SuspensionConfig)
     run: RunConfig = section(RunConfig)
     source: str | None = field(default=None, compare=False, metadata=dict(kind="internal"))
 
@@ -364,6 +405,9 @@ def _build(cls, table, path, problems):
     return cls(**values)
 
 
+MAX_INLET_COURANT = 1.0
+
+
 def _gas_checks(case: Case, problems: list) -> None:
     g = case.gas
     if case.particles.count == 0 and not g.enabled:
@@ -387,6 +431,16 @@ def _gas_checks(case: Case, problems: list) -> None:
         if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
             problems.append(f"gas.cfd_step = {g.cfd_step:g}: must be a whole multiple of time.dem_step = "
                             f"{case.time.dem_step:g}")
+    # the gas solver's explicit parts (the old-flux Rhie-Chow correction, the exact-exchange return)
+    # diverge from an inlet Courant number of about 1.3 with PISO (tools/stability_map.py, cfd map): refuse
+    # > 1; SIMPLE iterates each step to convergence and takes large (steady-state) steps
+    spacing = min((hi - lo) / n for lo, hi, n in zip(case.domain.lower, case.domain.upper, g.cells))
+    courant = g.inlet_velocity * g.cfd_step / spacing
+    if g.scheme == "piso" and courant > MAX_INLET_COURANT:
+        problems.append(f"gas.cfd_step = {g.cfd_step:g}: the inlet Courant number U dt / dx = {courant:.3g} "
+                        f"(U {g.inlet_velocity:g} m/s, cell {spacing:.3g} m) exceeds {MAX_INLET_COURANT:g}; the gas "
+                        f"PISO solver diverges from about 1.3 (docs/speed-accuracy.md); use cfd_step <= "
+                        f"{MAX_INLET_COURANT * spacing / g.inlet_velocity:.3g} s")
     zone = g.porous_zone
     if zone.enabled and (zone.lower is None or zone.upper is None):
         problems.append("gas.porous_zone: lower and upper corners are required when enabled")
@@ -446,7 +500,14 @@ def _cross_checks(case: Case, problems: list) -> None:
         if upper[d] - lower[d] < extent:
             problems.append(f"domain: the box is {upper[d] - lower[d]:g} m along {axis}, narrower than one "
                             f"particle ({extent:g} m)")
-    if p.initial_state is None:
+    if p.initial_state is None and p.insertion.method == "compress":
+        if not all(case.domain.periodic):
+            problems.append("particles.insertion.method = 'compress': only for a fully periodic box "
+                            "(domain.periodic = [true, true, true])")
+        elif solid > 0.55 * box_volume:
+            problems.append(f"particles.count = {p.count}: solids fraction {solid / box_volume:.3f} above 0.55, "
+                            "more than a random packing made by compression reaches")
+    elif p.initial_state is None:
         ins = p.insertion
         lo = ins.lower or lower
         hi = ins.upper or upper
@@ -509,6 +570,11 @@ def case_from_dict(table: dict, source: str | None = None) -> Case:
                             "give one of them")
         else:
             case = replace(case, gas=replace(g, inlet_velocity=g.u_over_umf * g.umf))
+    if not problems and case.suspension.enabled:
+        from .scenes import expand_suspension
+        table = expand_suspension(case, table, problems)
+        if not problems:
+            case = _build(Case, table, "", problems)
     if not problems:
         _cross_checks(case, problems)
     if problems:

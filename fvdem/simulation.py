@@ -20,9 +20,12 @@ import numpy as np
 
 from .analysis.bed import bed_top, packed_bed_summary
 from .analysis.mixing import mixing_indices, mixing_time
+from .analysis.suspension import (orientation_histogram, settling_velocity, steady_window,
+                                  velocity_fluctuations)
 from .case import Case, CaseError, to_toml
 from .coupling.bridge import CouplingBridge
 from .dem.insertion import insert_particles
+from .dem.packing import compress_periodic
 from .dem.particles import ParticleArrays
 from .dem.system import Box, ContactModel, DEMSystem, SimulationError
 from .gas.phase import GasPhase
@@ -63,6 +66,15 @@ def build_particles(case: Case) -> ParticleArrays:
             raise CaseError([f"particles.count = {cfg.count}: the initial state {path} holds {particles.count}"])
         if not (np.allclose(particles.radius, cfg.radius) and np.allclose(particles.half_length, cfg.half_length)):
             raise CaseError([f"particles: the shape in {path} differs from the case's diameter/length"])
+    elif cfg.insertion.method == "compress":
+        lower, upper = np.asarray(case.domain.lower, float), np.asarray(case.domain.upper, float)
+        try:
+            particles = compress_periodic(cfg.count, cfg.radius, cfg.half_length, cfg.density, upper - lower,
+                                          cfg.insertion.seed, cfg.insertion.orientation
+                                          if cfg.shape == "spherocylinder" else "vertical")
+        except ValueError as exc:
+            raise CaseError([f"particles.insertion: {exc}"]) from None
+        particles.position += lower
     else:
         ins = cfg.insertion
         lower = ins.lower or case.domain.lower
@@ -127,6 +139,10 @@ class _WriterState:
     settled: bool = False
     pressure_history: list = field(default_factory=list)  # (time [s], bed pressure drop [Pa]) rows
     mixing_history: list = field(default_factory=list)  # (time [s], mixing entropy) rows
+    # periodic suspension: (time [s], slip Re, settling velocity [m/s], sigma_z, sigma_h [m/s]) rows,
+    # and (time [s], orientation-angle density per bin...) rows every tenth sample
+    suspension_history: list = field(default_factory=list)
+    orientation_history: list = field(default_factory=list)
 
 
 class Simulation:
@@ -153,6 +169,8 @@ class Simulation:
         self.coupled = has_particles and case.gas.enabled and case.coupling.enabled
         # fixed particles never move: only the gas steps (the case refuses them without gas)
         self._gas_steps_only = not has_particles or (case.particles.fixed and not self.coupled)
+        # a fully periodic coupled box is a suspension (seed 004): slip Re, fluctuations, orientations
+        self.periodic_suspension = self.coupled and all(case.domain.periodic) and not case.particles.fixed
         dt = case.gas.cfd_step if self.coupled or self._gas_steps_only else case.time.dem_step
         self._dt = dt
         self._cfd_every = max(1, round(case.gas.cfd_step / case.time.dem_step)) if has_particles else 1
@@ -253,11 +271,28 @@ class Simulation:
             lo, hi = self.case.domain.lower, self.case.domain.upper
             diag["mixing_entropy"], diag["lacey_index"] = mixing_indices(p.position, p.colour, lo, hi,
                                                                          self.mixing_cells)
+        if self.periodic_suspension:
+            diag.update(self._suspension_diagnostics())
         if self.bridge is not None:
             diag.update(self.bridge.diagnostics())
             if "bed_pressure_drop" in diag:
                 diag["pressure_drop_over_weight"] = diag["bed_pressure_drop"] / self.bed_weight_per_area()
         return diag
+
+    def _suspension_diagnostics(self) -> dict:
+        """Slip Reynolds number ``(1 - phi) (u_f - u_p) d_e / nu`` (seed 004's ``(<u_z> - <u_pz>) d_e / nu``,
+        see fvdem.analysis.suspension), the settling velocity [m/s], the particle velocity fluctuations
+        [m/s] and the z momentum of particles plus liquid [kg m/s] (zero in a force-balanced box)."""
+        p, s, g = self.particles, self.gas.solver, self.case.gas
+        fluid = s.flux_velocity()
+        settling, phi = settling_velocity(s.voidage, self.gas.mesh.cell_volumes, fluid, p.velocity)
+        sigma_z, sigma_h = velocity_fluctuations(p.velocity)
+        d_e = (6.0 * self.case.particles.volume / np.pi) ** (1.0 / 3.0)
+        momentum = float((p.mass * p.velocity[:, 2]).sum()
+                         + g.density * (s.voidage * self.gas.mesh.cell_volumes * s.velocity[:, 2]).sum())
+        return {"slip_reynolds": settling * d_e * g.density / g.viscosity, "settling_velocity": settling,
+                "solids_fraction": phi, "velocity_fluctuation_vertical": sigma_z,
+                "velocity_fluctuation_horizontal": sigma_h, "mixture_momentum_z": momentum}
 
     def bed_weight_per_area(self) -> float:
         """Particle weight over the column's cross-section, W/A [Pa] (the fluidized-bed pressure drop)."""
@@ -307,7 +342,11 @@ class Simulation:
 
     def _next_event(self, step: int) -> int:
         if self.out is None:
-            return self._timeseries_schedule.next_after(step) if self.case.time.stop_when_settled else step + 10**9
+            # without an output folder the samples still feed the settled test and the histories the
+            # summary reads (t95, pressure drop, suspension statistics)
+            records = (self.case.time.stop_when_settled or self.periodic_suspension or self.two_colours
+                       or self.bridge is not None)
+            return self._timeseries_schedule.next_after(step) if records else step + 10**9
         return min(s.next_after(step) for s in (self._timeseries_schedule, self._snapshot_schedule,
                                                   self._checkpoint_schedule))
 
@@ -323,6 +362,14 @@ class Simulation:
             if "mixing_entropy" in diag and (not self.writers.mixing_history
                                              or self.writers.mixing_history[-1][0] < self.time):
                 self.writers.mixing_history.append((self.time, diag["mixing_entropy"]))
+            if self.periodic_suspension and (not self.writers.suspension_history
+                                             or self.writers.suspension_history[-1][0] < self.time):
+                self.writers.suspension_history.append(
+                    (self.time, diag["slip_reynolds"], diag["settling_velocity"],
+                     diag["velocity_fluctuation_vertical"], diag["velocity_fluctuation_horizontal"]))
+                if len(self.writers.suspension_history) % 10 == 1 and self.particles.half_length.max() > 0:
+                    density, _ = orientation_histogram(self.particles.axis)
+                    self.writers.orientation_history.append((self.time, *density.tolist()))
             if self.out is not None:
                 self._timeseries().append(diag)
             t = self.case.time
@@ -355,6 +402,9 @@ class Simulation:
                 columns += ("bed_pressure_drop",)
         if self.two_colours:
             columns += ("mixing_entropy", "lacey_index")
+        if self.periodic_suspension:
+            columns += ("slip_reynolds", "settling_velocity", "velocity_fluctuation_vertical",
+                        "velocity_fluctuation_horizontal", "mixture_momentum_z")
         if self.bridge is not None:
             columns += ("over_packed_cells", "total_drag_z", "total_pressure_force_z")
             if not self.gas.solver.periodic:
@@ -411,13 +461,51 @@ class Simulation:
                                 "bed_pressure_drop_std_second_half": float(late[:, 1].std()),
                                 "pressure_drop_over_weight": mean / self.bed_weight_per_area(),
                                 "pressure_samples_second_half": int(len(late))})
+        if self.periodic_suspension:
+            summary["suspension"] = self.suspension_summary()
         return summary
+
+    def suspension_summary(self) -> dict | None:
+        """Steady-window statistics of a periodic suspension: the window (MSER, see
+        ``steady_window``), the mean slip Reynolds number with its batch-means standard error, the
+        velocity fluctuations over the mean settling velocity, and the orientation-angle density over
+        the window against the random ``sin`` (spherocylinders)."""
+        rows = np.asarray(self.writers.suspension_history, float).reshape(-1, 5)
+        if len(rows) < 20:
+            return None
+        window = steady_window(rows[:, 0], rows[:, 1])
+        steady = rows[rows[:, 0] >= window["start"]]
+        settling = float(steady[:, 2].mean())
+        p = self.case.particles
+        out = {"window_start": window["start"], "window_end": float(rows[-1, 0]), "samples": window["samples"],
+               "slip_reynolds": window["mean"], "slip_reynolds_standard_error": window["standard_error"],
+               "slip_reynolds_std": window["std"], "settling_velocity": settling,
+               "solids_fraction": float(p.count * p.volume / np.prod(np.subtract(self.case.domain.upper,
+                                                                                  self.case.domain.lower))),
+               "velocity_fluctuation_vertical_over_settling": float(np.sqrt((steady[:, 3] ** 2).mean())) / settling,
+               "velocity_fluctuation_horizontal_over_settling": float(np.sqrt((steady[:, 4] ** 2).mean())) / settling,
+               "equivalent_diameter": (6.0 * p.volume / np.pi) ** (1.0 / 3.0),
+               "kinematic_viscosity": self.case.gas.viscosity / self.case.gas.density}
+        orientation = np.asarray(self.writers.orientation_history, float)
+        if len(orientation):
+            late = orientation[orientation[:, 0] >= window["start"]]
+            late = late if len(late) else orientation[-1:]
+            edges = np.linspace(0.0, 0.5 * np.pi, orientation.shape[1])
+            centres = 0.5 * (edges[1:] + edges[:-1])
+            density = late[:, 1:].mean(axis=0)
+            out.update({"orientation_angle_centres": centres.tolist(), "orientation_density": density.tolist(),
+                        "orientation_random_density": np.sin(centres).tolist(),
+                        "mean_abs_cos_vertical": float((np.cos(centres) * density).sum() * (edges[1] - edges[0])),
+                        "orientation_samples": int(len(late))})
+        return out
 
     def _write_checkpoint(self) -> None:
         meta = {"writers": {"pvd_entries": self.writers.pvd_entries, "gas_pvd_entries": self.writers.gas_pvd_entries,
                             "wall_seconds": self.writers.wall_seconds, "cpu_seconds": self.writers.cpu_seconds,
                             "settled": self.writers.settled, "pressure_history": self.writers.pressure_history,
-                            "mixing_history": self.writers.mixing_history},
+                            "mixing_history": self.writers.mixing_history,
+                            "suspension_history": self.writers.suspension_history,
+                            "orientation_history": self.writers.orientation_history},
                 "time": self.time}
         state = {}
         if self.dem is not None:

@@ -73,7 +73,7 @@ def test_particles_and_gas_in_one_case_write_both_and_step_in_ratio(tmp_path):
         "particles": {"count": 60, "insertion": {"upper": [0.06, 0.06, 0.1]}},
         "gas": {"enabled": True, "cells": [4, 4, 10], "inlet_velocity": 0.2, "cfd_step": 1e-4},
         "coupling": {"enabled": False},
-        "time": {"end": 0.002},
+        "time": {"end": 0.002, "dem_step": 1e-5},
         "output": {"progress": False, "snapshot_interval": 0.001, "timeseries_interval": 0.0005,
                    "checkpoint_interval": 0.001}})
     sim = fvdem.Simulation(case, tmp_path / "out")

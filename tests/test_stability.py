@@ -35,3 +35,37 @@ def test_dem_steps_beyond_the_resolvable_are_refused_with_the_cause():
     assert by_ratio[14]["status"] == "ran" and abs(by_ratio[14]["restitution_error"]) < 0.01
     assert by_ratio[3]["status"] == "refused" and "cannot be reached" in by_ratio[3]["reason"]
     assert by_ratio[1.9]["status"] == "refused" and "exceeds half the collision time" in by_ratio[1.9]["reason"]
+
+
+def test_cfd_step_fails_at_one_courant_number_and_the_case_file_refuses_before_it():
+    """The gas column diverges at the same inlet Courant number U dt / dx for 3.16 and 10 m/s (a
+    Courant limit of the solver's explicit parts, not a time-scale one), between 1.0 and 1.6, and a
+    case file above the limit of 1 is refused with the cause before anything runs."""
+    result = stability_map.cfd_map([1.0, 1.6], scenes=((3.16, 0), (10.0, 0)), steps=60)
+    for scene, boundary in result["boundaries"].items():
+        assert boundary["largest_stable"] == 1.0 and boundary["diverged_from"] == 1.6, scene
+    for p in result["points"]:
+        if p["status"] == "diverged":
+            assert "Courant number" in p["reason"]
+    from fvdem.case import CaseError, case_from_dict
+    table = {"particles": {"count": 0}, "domain": {"upper": [0.06, 0.06, 0.45]},
+             "gas": {"enabled": True, "cells": [4, 4, 30], "inlet_velocity": 3.16, "cfd_step": 6e-3}}
+    with pytest.raises(CaseError) as err:
+        case_from_dict(table)
+    assert "inlet Courant number U dt / dx = 1.26" in str(err.value) and "use cfd_step <= 0.00475" in str(err.value)
+    table["gas"]["cfd_step"] = 4e-3
+    case_from_dict(table)  # 0.84: accepted
+
+
+def test_runtime_warns_once_when_a_cell_courant_number_exceeds_one():
+    import warnings
+    import fvdem
+    from fvdem.case import case_from_dict
+    case = case_from_dict({"particles": {"count": 0}, "domain": {"upper": [0.06, 0.06, 0.45]},
+                           "output": {"progress": False},
+                           "gas": {"enabled": True, "cells": [4, 4, 30], "inlet_velocity": 3.16, "cfd_step": 4.5e-3}})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fvdem.Simulation(case).run(20 * 4.5e-3)
+    messages = [str(w.message) for w in caught if "Courant" in str(w.message)]
+    assert len(messages) == 1 and "exceeds 1" in messages[0]

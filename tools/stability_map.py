@@ -11,6 +11,11 @@ Three maps, each swept rather than assumed, with the boundary found and the theo
   ``tau_p = m / c`` at the terminal state. Theory: explicit (forward Euler) diverges beyond
   ``dt = 2 m / (dF/dv)``, slightly below ``2 tau_p`` because the drag grows faster than linearly
   with the slip (``dF/dv = c (1 + dln c / dln v)``); semi-implicit never.
+- ``cfd``: the gas column of the reduced bed, empty and through a fixed bed, at CFD steps giving
+  inlet Courant numbers ``U dt / dx`` from 0.5 to 3. Theory: the implicit parts are unconditionally
+  stable, the explicit ones (old-flux Rhie-Chow correction, exchange return) limit the Courant
+  number, so the failure sits at one Courant number for every velocity. fvdem refuses an inlet
+  Courant number above 1 in the case file and warns at run time when a cell's exceeds 1.
 - ``voidage``: the largest voidage change of a cell while one particle crosses a cell face in small
   steps, for each voidage method and cell size / particle length. Theory: ``V_p / V_cell``
   (centroid), ``V_p / (satellites V_cell)`` (divided), continuous (trilinear).
@@ -142,8 +147,61 @@ def voidage_map(cell_over_length, samples=200):
             "theory": {"centroid": 1.0, "divided": 0.2, "trilinear": "continuous (jump -> 0 with the step)"}}
 
 
+# --------------------------------------------------------------------------- CFD step vs Courant number
+def _column_case(cfd_step, velocity, particles):
+    from fvdem.case import case_from_dict
+    return case_from_dict({
+        "name": "courant", "domain": {"upper": [0.06, 0.06, 0.45]},
+        "particles": {"shape": "sphere", "count": particles, "diameter": "5.3 mm", "density": 1442.0,
+                      "colour": "single", "fixed": True, "insertion": {"upper": [0.06, 0.06, 0.2], "seed": 7}},
+        "gas": {"enabled": True, "cells": [4, 4, 30], "cfd_step": cfd_step, "inlet_velocity": velocity},
+        "coupling": {"drag": "hoelzer-sommerfeld"}, "output": {"progress": False}, "run": {"threads": 1}})
+
+
+def cfd_map(courants, scenes=((3.16, 0), (10.0, 0), (1.5, 1000)), steps=100):
+    """The gas column of the reduced bed (0.06 x 0.06 x 0.45 m, 15 mm cells) at CFD steps giving inlet
+    Courant numbers ``U dt / dx`` in ``courants``: empty at two inlet velocities, and through a fixed
+    bed of 1,000 spheres, each for ``steps`` steps. The case-file check is bypassed (it refuses
+    inlet Courant numbers above 1) to find where the solver itself fails. Theory: implicit upwind
+    convection with implicit pressure is unconditionally stable; the explicit parts (the old-flux
+    Rhie-Chow correction, the exact-exchange return) are not, so a failure must scale with the
+    Courant number: at the same ``U dt / dx`` for every velocity."""
+    import warnings
+    from unittest import mock
+    from fvdem.simulation import Simulation
+    points = []
+    for velocity, particles in scenes:
+        for courant in courants:
+            dt = courant * 0.015 / velocity
+            with mock.patch("fvdem.case.MAX_INLET_COURANT", float("inf")), warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                sim = Simulation(_column_case(dt, velocity, particles))
+                largest, status, reason = 0.0, "stable", None
+                with np.errstate(all="ignore"):
+                    try:
+                        for _ in range(steps):
+                            sim.run(dt)
+                            largest = max(largest, sim.gas.courant_number())
+                    except SimulationError as exc:
+                        status, reason = "diverged", str(exc)
+            points.append({"inlet_velocity": velocity, "particles": particles, "inlet_courant": courant,
+                           "cfd_step": dt, "largest_cell_courant": largest if status == "stable" else None,
+                           "status": status, "reason": reason})
+    boundaries = {}
+    for velocity, particles in scenes:
+        pts = [p for p in points if p["inlet_velocity"] == velocity and p["particles"] == particles]
+        failed = [p["inlet_courant"] for p in pts if p["status"] == "diverged"]
+        stable = [p["inlet_courant"] for p in pts if p["status"] == "stable"
+                  and (not failed or p["inlet_courant"] < min(failed))]
+        boundaries[f"U={velocity:g} m/s, {particles} fixed particles"] = {
+            "largest_stable": max(stable) if stable else None, "diverged_from": min(failed) if failed else None,
+            "largest_stable_cell_courant": max((p["largest_cell_courant"] for p in pts if p["status"] == "stable"
+                                                and p["inlet_courant"] in stable), default=None)}
+    return {"points": points, "boundaries": boundaries, "case_file_limit": 1.0, "runtime_warning_cell_courant": 1.0}
+
+
 # --------------------------------------------------------------------------- plots and main
-def _plots(out, dem, drag, void):
+def _plots(out, dem, drag, void, cfd=None):
     from fvdem.analysis.plots import _pyplot, _save
     plt = _pyplot()
     paths = []
@@ -182,6 +240,22 @@ def _plots(out, dem, drag, void):
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     paths.append(_save(fig, Path(out) / "stability_voidage.png"))
+
+    if cfd is not None:
+        fig, ax = plt.subplots(figsize=(5.5, 3.8))
+        scenes = sorted({(p["inlet_velocity"], p["particles"]) for p in cfd["points"]})
+        for k, (velocity, particles) in enumerate(scenes):
+            pts = [p for p in cfd["points"] if p["inlet_velocity"] == velocity and p["particles"] == particles]
+            for p in pts:
+                ax.scatter(p["inlet_courant"], k, marker="o" if p["status"] == "stable" else "x",
+                           color="tab:green" if p["status"] == "stable" else "tab:red")
+        ax.set_yticks(range(len(scenes)), [f"U {v:g} m/s, {n} fixed" for v, n in scenes], fontsize=7)
+        ax.axvline(1.0, color="k", ls=":", label="case-file limit (refused above)")
+        ax.set_xlabel("inlet Courant number U dt / dx  (o stable, x diverged)")
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        paths.append(_save(fig, Path(out) / "stability_cfd.png"))
     return [str(p) for p in paths]
 
 
@@ -190,9 +264,11 @@ def run(quick=False, out="."):
     divisors = [50, 14, 10, 5, 3, 2.2, 1.9, 1.5] if not quick else [14, 3, 1.9]
     ratios = [0.5, 1.0, 1.5, 1.8, 1.95, 2.05, 2.2, 3.0, 5.0, 10.0, 20.0] if not quick else [0.5, 1.9, 2.1, 5.0]
     lengths = [0.75, 1.25, 2.0, 3.0] if not quick else [1.25]
+    courants = [0.5, 1.0, 1.2, 1.4, 1.6, 2.0, 3.0] if not quick else [1.0, 1.6]
     dem, drag, void = dem_map(divisors), drag_map(ratios), voidage_map(lengths, 200 if not quick else 60)
-    plots = _plots(out, dem, drag, void)
-    return {"dem": dem, "drag": drag, "voidage": void, "plots": plots,
+    cfd = cfd_map(courants, steps=100 if not quick else 60)
+    plots = _plots(out, dem, drag, void, cfd)
+    return {"dem": dem, "drag": drag, "voidage": void, "cfd": cfd, "plots": plots,
             "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0}
 
 

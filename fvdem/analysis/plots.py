@@ -173,6 +173,35 @@ def plot_orientation(out, state_file="final_state.npz") -> Path:
     return _save(fig, Path(out) / "orientation.png")
 
 
+def plot_suspension(out) -> Path:
+    """A periodic suspension: slip Reynolds number over time with the steady window and its mean
+    (+- standard error) from summary.json, and the particle velocity fluctuations over the settling
+    velocity."""
+    import json
+    series = read_timeseries(out)
+    summary = json.loads((Path(out) / "summary.json").read_text()).get("suspension") or {}
+    plt = _pyplot()
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.5, 5.5), sharex=True)
+    t = series["time"]
+    top.plot(t, series["slip_reynolds"], lw=0.8, label="slip Re")
+    if summary:
+        top.axvspan(summary["window_start"], summary["window_end"], color="tab:green", alpha=0.12,
+                    label="steady window (MSER)")
+        top.axhline(summary["slip_reynolds"], color="tab:green",
+                    label=f"mean {summary['slip_reynolds']:.2f} +- {summary['slip_reynolds_standard_error']:.2f}")
+    top.set_ylabel("Re = (<u_z> - <u_pz>) d_e / nu")
+    top.legend(fontsize=8)
+    top.grid(alpha=0.3)
+    settling = np.where(np.abs(series["settling_velocity"]) > 0, series["settling_velocity"], np.nan)
+    bottom.plot(t, series["velocity_fluctuation_vertical"] / settling, label="vertical")
+    bottom.plot(t, series["velocity_fluctuation_horizontal"] / settling, label="horizontal")
+    bottom.set_xlabel("time [s]")
+    bottom.set_ylabel("velocity fluctuation / settling velocity")
+    bottom.legend(fontsize=8)
+    bottom.grid(alpha=0.3)
+    return _save(fig, Path(out) / "suspension.png")
+
+
 def report(out) -> list:
     """All plots a run folder supports; returns the written paths."""
     out = Path(out)
@@ -187,6 +216,9 @@ def report(out) -> list:
         paths.append(plot_gas_profile(out))
         if len(list(out.glob("gas_*.vtu"))) > 1:
             paths.append(plot_void_fraction_histogram(out))
-    if "mixing_entropy" in read_timeseries(out):
+    series = read_timeseries(out)
+    if "mixing_entropy" in series:
         paths.append(plot_mixing([out], out / "mixing.png"))
+    if "slip_reynolds" in series and (out / "summary.json").exists():
+        paths.append(plot_suspension(out))
     return paths

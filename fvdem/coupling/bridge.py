@@ -97,6 +97,16 @@ class HydrodynamicModel:
         return None
 
 
+def rotational_drag_torque(angular_velocity, inertia, coefficient, dt):
+    """Rotational (viscous) drag [N m] (N, 3) held over a coupling interval ``dt`` [s]: the torque that
+    takes ``omega`` to ``omega exp(-dt / tau)`` over the interval, ``tau = I / coefficient`` (``I``
+    the transverse moment [kg m^2], ``coefficient`` [N m s], e.g. Stokes' ``pi mu d^3``), i.e. the exact
+    decay of ``I d(omega)/dt = -coefficient omega``; stable for any ``dt`` (a torque ``-coefficient
+    omega`` held explicitly reverses the spin once ``dt > 2 tau``)."""
+    decay = -np.expm1(-dt * coefficient / inertia)
+    return -(inertia * decay / dt)[:, None] * angular_velocity
+
+
 def particle_response(mass, drag_coefficient, substep, substeps):
     """``(1 - R, k)`` of the implicit kicks over one coupling interval: ``R = (1 + q)^(-2n)``,
     ``q = (h / 2) c / m``, and ``k = (1 - R) m / (c dt) - 1`` (0 where ``c = 0``), ``dt = n h``."""
@@ -120,6 +130,9 @@ class CouplingBridge:
                                        p.length if p.shape != "sphere" else p.diameter,
                                        case.gas.density, case.gas.viscosity)
         self.cfd_step = case.gas.cfd_step
+        self.rotational_drag = cfg.rotational_drag == "stokes" and not p.fixed
+        # Stokes' rotational drag of the volume-equivalent sphere, 8 pi mu r^3 = pi mu d_e^3 [N m s]
+        self._rotational_coefficient = np.pi * case.gas.viscosity * (6.0 * p.volume / np.pi)
         self.substeps = max(1, round(case.gas.cfd_step / case.time.dem_step))
         self.semi_implicit = cfg.drag_treatment == "semi-implicit"
         self.dem.implicit_drag = self.semi_implicit and not self.fixed
@@ -197,6 +210,9 @@ class CouplingBridge:
         else:
             p.external_force[:] = external
             p.external_torque[:] = 0.0 if torque is None else torque
+            if self.rotational_drag:
+                p.external_torque += rotational_drag_torque(p.angular_velocity, p.inertia[:, 0],
+                                                            self._rotational_coefficient, dt)
             p.drag_coefficient[:] = c if self.semi_implicit else 0.0
             p.fluid_velocity[:] = fluid_velocity
             p.drag_impulse[:] = 0.0

@@ -1,10 +1,16 @@
 """The gas phase of a case: grid, solver, fixed porous zone, diagnostics and checkpoint state."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .mesh import GasMesh
 from .solver import GasProperties, GasSolver
+
+# above this largest cell Courant number |u| dt / dx a run is warned (once): steady flow diverges from
+# about 2 (tools/stability_map.py, cfd map) and a bed's velocity spikes grow with it
+WARN_COURANT = 1.0
 
 
 class GasPhase:
@@ -38,6 +44,7 @@ class GasPhase:
         self.exchange_source = np.zeros((n, 3))  # [N/m^3]
         self._body_force = np.asarray(g.body_force, float)
         self.mean_pressure_gradient = np.asarray(g.mean_pressure_gradient, float)
+        self._courant_warned = False
 
     def set_voidage(self, voidage, previous=None) -> None:
         """New particle voidage for the next step; the current one becomes the old level of the
@@ -65,9 +72,24 @@ class GasPhase:
         s.beta[:] = self.exchange_beta
         self._update_porous_zone()
         s.source[:] = self._body_force + s.voidage[:, None] * self.mean_pressure_gradient + self.exchange_source
-        info = s.step(self.dt)
+        try:
+            info = s.step(self.dt)
+        except (RuntimeError, ValueError, FloatingPointError) as exc:  # e.g. a singular factorization
+            from ..dem.system import SimulationError
+            if isinstance(exc, SimulationError):
+                raise
+            raise SimulationError(f"the gas step diverged ({exc}) at step {self.step_count}; CFD step {self.dt:.3g} s, "
+                                  f"largest Courant number {self.courant_number():.3g} "
+                                  "(docs/speed-accuracy.md: keep it below 1)") from None
         s.voidage_old[:] = s.voidage
         self.step_count += 1
+        courant = self.courant_number()
+        if courant > WARN_COURANT and self.config.scheme == "piso" and not self._courant_warned:
+            self._courant_warned = True
+            warnings.warn(f"gas step {self.step_count}: largest cell Courant number {courant:.3g} exceeds "
+                          f"{WARN_COURANT:g} (CFD step {self.dt:.3g} s): steady flow diverges from about 2 and "
+                          "a bed's pressure drop and voidage lose accuracy (docs/speed-accuracy.md); reduce "
+                          "gas.cfd_step", RuntimeWarning, stacklevel=2)
         return info
 
     # ------------------------------------------------------------------ observables

@@ -1,0 +1,200 @@
+"""Hindered settling of a periodic suspension against Richardson-Zaki (issue 6, seed 004).
+
+For one particle shape (seed 004's cylinders of aspect ratio l/d, as equal-volume spherocylinders, or
+spheres) and one Galileo number, runs the fully periodic, force-balanced suspension of
+``cases/hindered_settling.toml`` at mean solids fractions 0.1, 0.2, 0.29, 0.4, 0.48, takes each run's
+slip Reynolds number ``Re = (<u_z> - <u_pz>) d_e / nu`` over its automatically chosen steady window
+(with the batch-means standard error), and fits ``Re = Re_inf (1 - phi)^N`` by least squares (in log
+space). Compared with Richardson-Zaki for spheres, ``N = 4.45 Re_inf^-0.1`` (1 < Re_inf < 500), and
+with the single particle's terminal Reynolds number under the same drag closure (the phi -> 0 limit,
+from the drag balance, independent of the suspension runs).
+
+    python tools/validate_hindered_settling.py --aspect-ratio 2 --ga-e 1296 --json
+    python tools/validate_hindered_settling.py --aspect-ratio 4 --ga 864 --json
+    python tools/validate_hindered_settling.py --sphere --ga 864 --json
+
+The box is seed 004's 9 d x 9 d x 18 d where the periodic neighbour search allows it (box at least
+3 x the particle length plus skin), else the smallest n d x n d x 2n d that does (14 x 14 x 28 for
+l/d = 4); cells about 3 d. Writes ``hindered_<tag>_re.png`` (Re against 1 - phi, log axes),
+``hindered_<tag>_orientation.png`` and ``hindered_<tag>_fluctuations.png``, and prints as its last
+line one JSON object (``re_by_phi``, ``re_inf``, ``n_exponent``, ``fit_r2``, ...).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+FRACTIONS = (0.1, 0.2, 0.29, 0.4, 0.48)
+
+
+def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1):
+    d_over_length = 1.0 if sphere else aspect_ratio + 1.0 / 3.0  # particle length in d
+    reach = d_over_length + 0.1
+    side = max(9, math.ceil(3.0 * reach + 1e-9))
+    cells = max(3, round(side / 3))
+    suspension = {"enabled": True, "particle": "sphere" if sphere else "cylinder", "density_ratio": 2.0,
+                  "solids_fraction": phi, "box": [side, side, 2 * side], "cells": [cells, cells, 2 * cells],
+                  "duration": duration}
+    if not sphere:
+        suspension["aspect_ratio"] = aspect_ratio
+    if ga is not None:
+        suspension["galileo"] = ga
+    else:
+        suspension["galileo_equivalent"] = ga_e
+    return {"name": f"hindered_{phi:g}", "suspension": suspension,
+            "particles": {"insertion": {"seed": seed}},
+            "output": {"progress": False, "vtk": False, "timeseries_interval": "2 ms"}}
+
+
+def run_one(table, threads):
+    from fvdem.case import case_from_dict
+    from fvdem.simulation import Simulation
+    case = case_from_dict(table)
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    sim = Simulation(case, threads=threads, progress=False)
+    summary = sim.run()
+    result = dict(summary["suspension"])
+    result.update(particles=case.particles.count, wall_seconds=time.perf_counter() - wall0,
+                  cpu_seconds=time.process_time() - cpu0, simulated_seconds=sim.time,
+                  box=list(case.suspension.box), cells=list(case.gas.cells),
+                  max_overlap_over_diameter=summary["max_overlap_over_diameter"])
+    return result
+
+
+def terminal_reynolds(table):
+    """phi -> 0 limit: the single particle's terminal Re (on d_e) under the case's drag closure, from
+    m' g = c(v) v with buoyancy, isotropic orientation average of the drag (the closure at the
+    particles' orientations is averaged over random axes)."""
+    from fvdem.case import case_from_dict
+    from fvdem.coupling.bridge import HydrodynamicModel
+    case = case_from_dict(table)
+    p, g = case.particles, case.gas
+    model = HydrodynamicModel(case.coupling.drag, "none", "none", p.diameter,
+                              p.length if p.shape != "sphere" else p.diameter, g.density, g.viscosity)
+    rng = np.random.default_rng(0)
+    axis = rng.normal(size=(400, 3))
+    axis /= np.linalg.norm(axis, axis=1)[:, None]
+    weight = (p.density - g.density) * p.volume * 9.81
+    v = 1e-3
+    for _ in range(200):
+        slip = np.tile([0.0, 0.0, v], (len(axis), 1))
+        c = float(model.drag_coefficient(slip, np.ones(len(axis)), axis).mean())
+        v = 0.5 * v + 0.5 * weight / c
+    d_e = (6 * p.volume / math.pi) ** (1 / 3)
+    return v * d_e * g.density / g.viscosity
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--aspect-ratio", type=float, default=2.0, help="cylinder l/d (1, 2, 4 in seed 004)")
+    parser.add_argument("--sphere", action="store_true", help="spheres instead of cylinders")
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--ga", type=float, help="Galileo number on d")
+    group.add_argument("--ga-e", type=float, help="Galileo number on d_e")
+    parser.add_argument("--fractions", type=float, nargs="+", default=list(FRACTIONS))
+    parser.add_argument("--duration", type=float, default=20.0, help="viscous times d^2/nu per run")
+    parser.add_argument("--jobs", type=int, default=2, help="runs in parallel (each on one thread)")
+    parser.add_argument("--quick", action="store_true", help="three fractions, 6 viscous times (a smoke run)")
+    parser.add_argument("--out", default=".")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    if args.ga is None and args.ga_e is None:
+        args.ga_e = 1296.0
+    if args.quick:
+        args.fractions, args.duration = [0.1, 0.29, 0.48], 6.0
+    wall0 = time.perf_counter()
+    tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration) for phi in args.fractions]
+    with ProcessPoolExecutor(max_workers=max(1, args.jobs), mp_context=get_context("spawn")) as pool:
+        results = list(pool.map(run_one, tables, [1] * len(tables)))
+    for phi, r in zip(args.fractions, results):
+        print(f"<phi> = {phi:<5g} ({r['particles']} particles): Re = {r['slip_reynolds']:.3f} +- "
+              f"{r['slip_reynolds_standard_error']:.3f} over {r['window_start']:.2f}-{r['window_end']:.2f} s; "
+              f"sigma_z/u_s {r['velocity_fluctuation_vertical_over_settling']:.3f}, sigma_h/u_s "
+              f"{r['velocity_fluctuation_horizontal_over_settling']:.3f}; {r['wall_seconds']:.0f} s wall", flush=True)
+    from fvdem.analysis.suspension import richardson_zaki_exponent, richardson_zaki_fit
+    phis = [r["solids_fraction"] for r in results]
+    fit = richardson_zaki_fit(phis, [r["slip_reynolds"] for r in results])
+    re_terminal = terminal_reynolds(scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, 0.1, args.duration))
+    tag = ("sphere" if args.sphere else f"ar{args.aspect_ratio:g}") + (f"_ga{args.ga:g}" if args.ga else f"_gae{args.ga_e:g}")
+    out = Path(args.out)
+    plots = _plots(out, tag, results, fit)
+    result = {
+        "shape": "sphere" if args.sphere else "cylinder (equal-volume spherocylinder)",
+        "aspect_ratio": None if args.sphere else args.aspect_ratio,
+        "galileo": args.ga, "galileo_equivalent": args.ga_e,
+        "re_by_phi": {f"{phi:g}": r["slip_reynolds"] for phi, r in zip(args.fractions, results)},
+        "re_standard_error_by_phi": {f"{phi:g}": r["slip_reynolds_standard_error"] for phi, r in zip(args.fractions, results)},
+        "re_inf": fit["re_inf"], "n_exponent": fit["n_exponent"], "fit_r2": fit["r2"],
+        "richardson_zaki_n": richardson_zaki_exponent(fit["re_inf"]),
+        "single_particle_terminal_re": re_terminal,
+        "fluctuations_by_phi": {f"{phi:g}": {"vertical": r["velocity_fluctuation_vertical_over_settling"],
+                                             "horizontal": r["velocity_fluctuation_horizontal_over_settling"]}
+                                for phi, r in zip(args.fractions, results)},
+        "mean_abs_cos_vertical_by_phi": {f"{phi:g}": r.get("mean_abs_cos_vertical") for phi, r in zip(args.fractions, results)},
+        "runs": results, "plots": plots, "duration_viscous_times": args.duration,
+        "wall_seconds": time.perf_counter() - wall0,
+    }
+    print(json.dumps(result) if args.json else json.dumps(result, indent=2))
+
+
+def _plots(out, tag, results, fit):
+    from fvdem.analysis.plots import _pyplot, _save
+    from fvdem.analysis.suspension import richardson_zaki_exponent
+    plt = _pyplot()
+    paths = []
+    phi = np.array([r["solids_fraction"] for r in results])
+    re = np.array([r["slip_reynolds"] for r in results])
+    err = np.array([r["slip_reynolds_standard_error"] for r in results])
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ax.errorbar(1 - phi, re, yerr=err, fmt="o", label="fvdem (steady-window mean)")
+    x = np.linspace(0.45, 1.0, 50)
+    ax.plot(x, fit["re_inf"] * x ** fit["n_exponent"], "-",
+            label=f"fit: Re_inf {fit['re_inf']:.1f}, N {fit['n_exponent']:.2f} (r2 {fit['r2']:.3f})")
+    n_rz = richardson_zaki_exponent(fit["re_inf"])
+    ax.plot(x, fit["re_inf"] * x ** n_rz, "--", color="grey", label=f"Richardson-Zaki N = {n_rz:.2f}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("1 - <phi>")
+    ax.set_ylabel("slip Reynolds number Re")
+    ax.set_title(tag)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    paths.append(str(_save(fig, Path(out) / f"hindered_{tag}_re.png")))
+
+    if any("orientation_density" in r for r in results):
+        fig, ax = plt.subplots(figsize=(5.5, 4))
+        for r in results:
+            if "orientation_density" in r:
+                ax.plot(np.degrees(r["orientation_angle_centres"]), r["orientation_density"], "o-", ms=3,
+                        label=f"<phi> = {r['solids_fraction']:.2f}")
+        centres = np.array(results[0].get("orientation_angle_centres", []))
+        if len(centres):
+            ax.plot(np.degrees(centres), np.sin(centres), "k--", label="random: sin(angle)")
+        ax.set_xlabel("angle between axis and vertical [deg]")
+        ax.set_ylabel("probability density [1/rad]")
+        ax.set_title(tag)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        paths.append(str(_save(fig, Path(out) / f"hindered_{tag}_orientation.png")))
+
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ax.plot(phi, [r["velocity_fluctuation_vertical_over_settling"] for r in results], "o-", label="vertical")
+    ax.plot(phi, [r["velocity_fluctuation_horizontal_over_settling"] for r in results], "s-", label="horizontal")
+    ax.set_xlabel("<phi>")
+    ax.set_ylabel("particle velocity fluctuation / settling velocity")
+    ax.set_title(tag)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    paths.append(str(_save(fig, Path(out) / f"hindered_{tag}_fluctuations.png")))
+    return paths
+
+
+if __name__ == "__main__":
+    main()
