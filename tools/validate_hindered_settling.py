@@ -104,7 +104,12 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="three fractions, 6 viscous times (a smoke run)")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
+                        help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
     args = parser.parse_args(argv)
+    if args.combine:
+        print(_combined_plot(Path(args.out) / "hindered_settling.png", args.combine))
+        return
     if args.ga is None and args.ga_e is None:
         args.ga_e = 1296.0
     if args.quick:
@@ -142,6 +147,33 @@ def main(argv=None):
         "wall_seconds": time.perf_counter() - wall0,
     }
     print(json.dumps(result) if args.json else json.dumps(result, indent=2))
+
+
+def _combined_plot(path, outputs):
+    """Re against 1 - <phi> of several sweeps on one chart, with each fit and Richardson-Zaki."""
+    from fvdem.analysis.plots import _pyplot, _save
+    from fvdem.analysis.suspension import richardson_zaki_exponent
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
+    for name in outputs:
+        r = json.loads(Path(name).read_text().strip().splitlines()[-1])
+        ax = axes[0] if r["galileo"] is not None else axes[1]
+        label = "sphere" if r["aspect_ratio"] is None else f"l/d = {r['aspect_ratio']:g}"
+        phi = np.array([run["solids_fraction"] for run in r["runs"]])
+        re = np.array([run["slip_reynolds"] for run in r["runs"]])
+        line, = ax.plot(1 - phi, re, "o", label=f"{label}: Re_inf {r['re_inf']:.1f}, N {r['n_exponent']:.2f}")
+        x = np.linspace(0.5, 1.0, 30)
+        ax.plot(x, r["re_inf"] * x ** r["n_exponent"], "-", color=line.get_color(), lw=1)
+        ax.plot(x, r["re_inf"] * x ** richardson_zaki_exponent(r["re_inf"]), ":", color=line.get_color(), lw=1)
+    for ax, title in zip(axes, ("Ga = 864 (on d)", "Ga_e = 1296 (on d_e)")):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("1 - <phi>")
+        ax.set_title(title + "; fit (-), Richardson-Zaki (:)", fontsize=9)
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
+    axes[0].set_ylabel("slip Reynolds number Re")
+    return _save(fig, path)
 
 
 def _plots(out, tag, results, fit):
