@@ -187,6 +187,9 @@ class GasConfig:
     correctors: int = spec(2, kind="int", ge=1, doc="PISO pressure corrections per step")
     linear_solver: str = spec("iterative", kind="str", choices=("iterative", "direct"))
     linear_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0, doc="relative tolerance of the linear solves")
+    simple_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0,
+                                   doc="SIMPLE: iterate each step until the continuity residual and the relative "
+                                       "velocity change are below this")
     body_force: tuple = spec((0.0, 0.0, 0.0), kind="vec3", doc="body force on the gas [N/m^3] (drives a periodic box)")
     mean_pressure_gradient: tuple = spec((0.0, 0.0, 0.0), kind="vec3",
                                          doc="imposed -<grad p> [Pa/m] of a periodic box, acting on both phases: "

@@ -1,4 +1,4 @@
-"""Command line: ``fvdem run | check | report | info | schema``.
+"""Command line: ``fvdem run | check | report | compare | info | schema``.
 
 Input problems (case file, options, output folder) exit with code 2 and a message, never a
 traceback; a run that becomes unstable exits with code 3 and the cause.
@@ -59,6 +59,19 @@ def cmd_report(args) -> int:
     return 0
 
 
+def cmd_compare(args) -> int:
+    from .analysis.plots import plot_mixing, plot_t95
+    runs = [Path(r) for r in args.runs]
+    for run in runs:
+        if not (run / "timeseries.csv").exists() or not (run / "case.toml").exists():
+            return _fail(f"{run} is not a run folder (needs timeseries.csv and case.toml)")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    print(plot_mixing(runs, out / "mixing_compare.png"))
+    print(plot_t95(runs, out / "t95.png"))
+    return 0
+
+
 def cmd_info(args) -> int:
     import numba
     import numpy
@@ -93,6 +106,11 @@ def make_parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", help="write PNG plots for a run folder")
     report.add_argument("out")
     report.set_defaults(func=cmd_report)
+    compare = sub.add_parser("compare", help="several runs on one chart: mixing entropy against time and "
+                                             "t95 against U/Umf (seed 000 Figs. 2-4)")
+    compare.add_argument("runs", nargs="+")
+    compare.add_argument("--out", default=".", help="folder for mixing_compare.png and t95.png")
+    compare.set_defaults(func=cmd_compare)
     sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)
     sub.add_parser("schema", help="print the case-file reference (Markdown)").set_defaults(func=cmd_schema)
     return parser

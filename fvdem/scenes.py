@@ -22,8 +22,9 @@ diameters and cells per box. ``expand_suspension`` writes the dimensional set-up
 - momentum exactly exchanged: trilinear voidage (the transpose of the interpolation, so the
   pressure-gradient forces on liquid and particles sum to zero over the periodic box) and SIMPLE
   iterated to convergence each step (PISO's velocity is not the momentum equation's solution with the
-  final pressure: measured, the box's momentum drifts by 3e-5 of the particles' momentum with PISO,
-  1e-9 with SIMPLE, and by 16 % with the divided voidage).
+  final pressure: measured, the box's momentum drifts by 3e-5 of the particles' momentum with PISO
+  and by 16 % with the divided voidage); direct linear solves and SIMPLE converged to 1e-12 hold it
+  to round-off (4e-14; 2e-9 with Krylov solves to 1e-8, 1e-10 with SIMPLE converged to 1e-8).
 - contact stiffness: a head-on collision at the gravitational velocity ``sqrt((gamma - 1) g d_e)``
   overlaps ``overlap x d`` (``k_n = m* v^2 / (overlap d)^2`` with ``m* = m/2``); DEM step 1/20 of the
   collision time; CFD step the multiple of it closest to ``0.5 cell / v`` (SIMPLE converges each
@@ -31,7 +32,8 @@ diameters and cells per box. ``expand_suspension`` writes the dimensional set-up
 
 Keys the scene derives may also be given in the case file only with the derived value; the tunable
 ones (``contact.normal_stiffness``, ``time.dem_step``, ``gas.cfd_step``, ``time.end``,
-``coupling.rotational_drag``, ``coupling.voidage``, ``gas.scheme``, ``output.*``) take the case file's value when given.
+``coupling.rotational_drag``, ``coupling.voidage``, ``gas.scheme``,
+``gas.linear_solver``, ``gas.simple_tolerance``, ``output.*``) take the case file's value when given.
 """
 from __future__ import annotations
 
@@ -41,7 +43,8 @@ import math
 from .dem.contact_law import collision_time
 
 TUNABLE = {("contact", "normal_stiffness"), ("time", "dem_step"), ("gas", "cfd_step"), ("time", "end"),
-           ("coupling", "rotational_drag"), ("coupling", "voidage"), ("gas", "scheme")}
+           ("coupling", "rotational_drag"), ("coupling", "voidage"), ("gas", "scheme"), ("gas", "linear_solver"),
+           ("gas", "simple_tolerance")}
 
 
 def suspension_quantities(s, gravity: float) -> dict:
@@ -112,7 +115,8 @@ def expand_suspension(case, table: dict, problems: list) -> dict:
         ("gas", "mean_pressure_gradient"): tuple(0.0 - q["mixture_density"] * g for g in gravity_vector),
         ("contact", "normal_stiffness"): stiffness, ("time", "dem_step"): dem, ("gas", "cfd_step"): cfd,
         ("time", "end"): s.duration * q["viscous_time"], ("coupling", "rotational_drag"): "stokes",
-        ("coupling", "voidage"): "trilinear", ("gas", "scheme"): "simple",
+        ("coupling", "voidage"): "trilinear", ("gas", "scheme"): "simple", ("gas", "linear_solver"): "direct",
+        ("gas", "simple_tolerance"): 1e-12,
         **{("particles", k): v for k, v in particles.items()},
     }
     out = copy.deepcopy(table)

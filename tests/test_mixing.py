@@ -47,3 +47,29 @@ def test_mixing_time_interpolates_the_first_crossing():
 def test_orientation_angle_is_folded_to_a_quarter_turn():
     axis = np.array([[0, 0, 1.0], [0, 0, -1.0], [1.0, 0, 0], [0, np.sqrt(0.5), np.sqrt(0.5)]])
     np.testing.assert_allclose(orientation_angles(axis), [0, 0, np.pi / 2, np.pi / 4])
+
+
+def test_t95_against_u_over_umf_from_run_folders(tmp_path):
+    """fvdem compare: t95 of each run folder against its U/Umf, grouped by case name; a run that has
+    not mixed gives None (drawn as a lower bound at its end)."""
+    from fvdem.analysis.plots import mixing_times
+    from fvdem.case import case_from_dict, to_toml
+    from fvdem.cli import main
+    runs = []
+    for name, ratio, rate in (("ar1", 1.6, 0.5), ("ar1", 2.9, 2.0), ("ar4_mp", 2.0, 0.05)):
+        out = tmp_path / f"{name}_{ratio}"
+        out.mkdir()
+        case = case_from_dict({"name": name, "gas": {"enabled": True, "umf": 1.58, "u_over_umf": ratio}})
+        (out / "case.toml").write_text(to_toml(case))
+        t = np.linspace(0, 4, 401)
+        entropy = 1 - np.exp(-rate * t)
+        (out / "timeseries.csv").write_text("time,mixing_entropy\n" + "".join(f"{a},{b}\n" for a, b in zip(t, entropy)))
+        runs.append(out)
+    table = mixing_times(runs)
+    assert [r for r, _, _ in table["ar1"]] == [1.6, 2.9]
+    # S = 1 - exp(-k t) reaches 0.95 at ln(20)/k: 5.99 s (beyond the 4 s run) and 1.50 s
+    assert table["ar1"][0][1] is None and table["ar1"][0][2] == 4.0
+    assert table["ar1"][1][1] == pytest.approx(np.log(20) / 2.0, abs=0.01)
+    assert table["ar4_mp"][0][1] is None
+    assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp")]) == 0
+    assert (tmp_path / "cmp" / "t95.png").exists() and (tmp_path / "cmp" / "mixing_compare.png").exists()

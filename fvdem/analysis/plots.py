@@ -134,6 +134,41 @@ def plot_mixing(runs, path, level=0.95) -> Path:
     return _save(fig, Path(path))
 
 
+def mixing_times(runs, level=0.95) -> dict:
+    """``{case name: [(U/Umf, t95 or None, simulated end), ...]}`` of run folders (their case.toml and
+    timeseries.csv), sorted by U/Umf: the data of seed 000's Fig. 4."""
+    from ..case import load_case
+    from .mixing import mixing_time
+    groups = {}
+    for out in runs:
+        case = load_case(Path(out) / "case.toml")
+        g = case.gas
+        ratio = g.u_over_umf if g.u_over_umf is not None else (g.inlet_velocity / g.umf if g.umf else g.inlet_velocity)
+        ts = read_timeseries(out)
+        t95 = mixing_time(ts["time"], ts["mixing_entropy"], level) if "mixing_entropy" in ts else None
+        groups.setdefault(case.name, []).append((float(ratio), t95, float(ts["time"][-1])))
+    return {name: sorted(rows) for name, rows in groups.items()}
+
+
+def plot_t95(runs, path, level=0.95) -> Path:
+    """Mixing time t95 against U/Umf, one line per case name (seed 000 Fig. 4). A run that has not
+    reached the level is drawn as an open triangle at its end time: t95 is later than that."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for name, rows in mixing_times(runs, level).items():
+        reached = [(r, t) for r, t, _ in rows if t is not None]
+        line, = ax.plot([r for r, _ in reached], [t for _, t in reached], "o-", label=name)
+        bound = [(r, end) for r, t, end in rows if t is None]
+        if bound:
+            ax.plot([r for r, _ in bound], [e for _, e in bound], "^", mfc="none", color=line.get_color(),
+                    label=f"{name}: not reached by the run's end (lower bound)")
+    ax.set_xlabel("U / Umf")
+    ax.set_ylabel(f"mixing time t{round(100 * level)} [s]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, Path(path))
+
+
 def plot_void_fraction_histogram(out, below=0.3) -> Path:
     """Histogram of the cell voidage below ``below`` [m] over all gas snapshots (seed 000 Fig. 7)."""
     import meshio

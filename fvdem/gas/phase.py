@@ -28,7 +28,7 @@ class GasPhase:
         self.solver = GasSolver(self.mesh, GasProperties(g.density, g.viscosity), case.domain.gravity,
                                 inlet_velocity=g.inlet_velocity, walls=g.walls, scheme=g.scheme,
                                 correctors=g.correctors, linear_solver=g.linear_solver,
-                                linear_tolerance=g.linear_tolerance)
+                                linear_tolerance=g.linear_tolerance, tolerance=g.simple_tolerance)
         self.dt = g.cfd_step
         self.step_count = 0
         zone = g.porous_zone
