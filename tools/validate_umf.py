@@ -31,9 +31,14 @@ RHO, MU, G = 1.2, 1.568e-5, 9.81
 EXPERIMENT = {"sphere": 1.58, "spherocylinder": 1.7}
 
 
-def build_case(shape, closures, particles, threads):
+SETTINGS = {"paper": {"normal_stiffness": 2.0e4, "dem_step": 1e-5, "cfd_step": 1e-4},
+            "default": {"normal_stiffness": 800.0, "dem_step": 5e-5, "cfd_step": 5e-4}}
+
+
+def build_case(shape, closures, particles, threads, width=0.06, settings="paper"):
+    cells = max(1, round(width / 0.015))
     p = {"shape": shape, "count": particles, "density": 1442.0, "colour": "single",
-         "insertion": {"upper": [0.06, 0.06, 0.2], "seed": 7}}
+         "insertion": {"upper": [width, width, 0.2 * (0.06 / width) ** 2 * particles / 2000], "seed": 7}}
     coupling = {"drag": "hoelzer-sommerfeld"}
     if shape == "sphere":
         p["diameter"] = "5.3 mm"
@@ -42,13 +47,15 @@ def build_case(shape, closures, particles, threads):
         name = "sanjeevi-padding" if closures == "mp" else "zastawny"
         coupling = {"drag": "sanjeevi-padding" if closures == "mp" else "hoelzer-sommerfeld",
                     "lift": name, "torque": name}
+    k = SETTINGS[settings]
     return case_from_dict({
         "name": "umf",
-        "domain": {"upper": [0.06, 0.06, 0.45]},
+        "domain": {"upper": [width, width, 0.45]},
         "particles": p,
-        "contact": {"normal_stiffness": 2.0e4, "restitution": 0.43, "friction": 0.46, "rolling_friction": 0.46},
-        "time": {"dem_step": 1e-5, "end": 100.0},
-        "gas": {"enabled": True, "cells": [4, 4, 30], "cfd_step": 1e-4,
+        "contact": {"normal_stiffness": k["normal_stiffness"], "restitution": 0.43, "friction": 0.46,
+                    "rolling_friction": 0.46},
+        "time": {"dem_step": k["dem_step"], "end": 100.0},
+        "gas": {"enabled": True, "cells": [cells, cells, 30], "cfd_step": k["cfd_step"],
                 "inlet_velocity": 2.0 * EXPERIMENT[shape]},
         "coupling": coupling,
         "output": {"progress": False, "timeseries_interval": 1e-3},
@@ -107,6 +114,10 @@ def main(argv=None):
     parser.add_argument("--start", type=float, default=0.5, help="seconds fluidized before the ramp")
     parser.add_argument("--quick", action="store_true", help="500 particles, short holds (a smoke test)")
     parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--width", type=float, default=0.06, help="column width [m] (a multiple of the 15 mm cells); "
+                        "scale --particles with the cross-section to keep the bed height")
+    parser.add_argument("--settings", choices=tuple(SETTINGS), default="paper",
+                        help="contact stiffness, DEM and CFD steps: seed 000's or fvdem's defaults")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
@@ -115,7 +126,7 @@ def main(argv=None):
     wall0, cpu0 = time.perf_counter(), time.process_time()
     shape = args.shape
     umf_exp = EXPERIMENT[shape]
-    case = build_case(shape, args.closures, args.particles, args.threads)
+    case = build_case(shape, args.closures, args.particles, args.threads, args.width, args.settings)
     sim = fvdem.Simulation(case)
     weight = sim.bed_weight_per_area()
     sim.run(args.start)
@@ -148,8 +159,9 @@ def main(argv=None):
         "plateau_over_weight": plateau / weight,
         "umf_wen_yu": wen_yu(d_p, p.density),
         "umf_ergun_at_packed_voidage": ergun_umf(d_p, p.density, 1.0 - 0.6, phi),
-        "bed": f"{p.count} particles in a 0.06 x 0.06 m column, 15 mm cells (shallower than the paper's "
-               "32,500 in 0.15 x 0.15 m; Umf is a property of particles and gas)",
+        "bed": f"{p.count} particles in a {args.width:g} x {args.width:g} m column, 15 mm cells (shallower than the "
+               "paper's 32,500 in 0.15 x 0.15 m; Umf is a property of particles and gas)",
+        "settings": args.settings,
         "hold_seconds": args.hold, "curve": curve, "plot": str(png),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
         "packed_solids_fraction_last": packed,
