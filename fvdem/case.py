@@ -10,6 +10,7 @@ The fully resolved case (defaults included) can be written back as TOML (``to_to
 """
 from __future__ import annotations
 
+import copy
 import difflib
 import math
 import tomllib
@@ -18,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from .dem.contact_law import collision_time
-from .dem.particles import spherocylinder_volume
+from .dem.particles import spherocylinder_volume, volume_equivalent_diameter
 
 # --------------------------------------------------------------------------- units
 UNITS = {
@@ -117,6 +118,11 @@ class ParticlesConfig:
     @property
     def mass(self) -> float:
         return self.density * self.volume
+
+    @property
+    def equivalent_diameter(self) -> float:
+        """Diameter of the sphere of the particle's volume, d_e [m]."""
+        return float(volume_equivalent_diameter(self.radius, self.half_length))
 
 
 @dataclass(frozen=True)
@@ -561,7 +567,13 @@ def parse_override(text: str):
     return key.strip(), value
 
 
-def case_from_dict(table: dict, source: str | None = None) -> Case:
+def case_from_dict(table: dict, source: str | None = None, overrides: dict | None = None) -> Case:
+    """Validate a case table (as read from TOML). ``overrides`` maps dotted keys to values
+    (``{"time.end": 0.5}``) and is applied, to a copy, before validation. Raises ``CaseError``."""
+    if overrides:
+        table = copy.deepcopy(table)
+        for key, value in overrides.items():
+            _set_path(table, key, value)
     problems: list[str] = []
     case = _build(Case, table, "", problems)
     if not problems and case.gas.u_over_umf is not None:
@@ -596,9 +608,7 @@ def load_case(path, overrides: dict | None = None) -> Case:
         raise CaseError([f"{path}: no such case file"]) from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError([f"{path}: not valid TOML: {exc}"]) from None
-    for key, value in (overrides or {}).items():
-        _set_path(table, key, value)
-    return case_from_dict(table, source=str(path))
+    return case_from_dict(table, source=str(path), overrides=overrides)
 
 
 # --------------------------------------------------------------------------- writing

@@ -12,7 +12,7 @@ import os
 import shutil
 import signal
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numba
@@ -287,7 +287,7 @@ class Simulation:
         fluid = s.flux_velocity()
         settling, phi = settling_velocity(s.voidage, self.gas.mesh.cell_volumes, fluid, p.velocity)
         sigma_z, sigma_h = velocity_fluctuations(p.velocity)
-        d_e = (6.0 * self.case.particles.volume / np.pi) ** (1.0 / 3.0)
+        d_e = self.case.particles.equivalent_diameter
         momentum = float((p.mass * p.velocity[:, 2]).sum()
                          + g.density * (s.voidage * self.gas.mesh.cell_volumes * s.velocity[:, 2]).sum())
         return {"slip_reynolds": settling * d_e * g.density / g.viscosity, "settling_velocity": settling,
@@ -484,7 +484,7 @@ class Simulation:
                                                                                   self.case.domain.lower))),
                "velocity_fluctuation_vertical_over_settling": float(np.sqrt((steady[:, 3] ** 2).mean())) / settling,
                "velocity_fluctuation_horizontal_over_settling": float(np.sqrt((steady[:, 4] ** 2).mean())) / settling,
-               "equivalent_diameter": (6.0 * p.volume / np.pi) ** (1.0 / 3.0),
+               "equivalent_diameter": p.equivalent_diameter,
                "kinematic_viscosity": self.case.gas.viscosity / self.case.gas.density}
         orientation = np.asarray(self.writers.orientation_history, float)
         if len(orientation):
@@ -500,13 +500,7 @@ class Simulation:
         return out
 
     def _write_checkpoint(self) -> None:
-        meta = {"writers": {"pvd_entries": self.writers.pvd_entries, "gas_pvd_entries": self.writers.gas_pvd_entries,
-                            "wall_seconds": self.writers.wall_seconds, "cpu_seconds": self.writers.cpu_seconds,
-                            "settled": self.writers.settled, "pressure_history": self.writers.pressure_history,
-                            "mixing_history": self.writers.mixing_history,
-                            "suspension_history": self.writers.suspension_history,
-                            "orientation_history": self.writers.orientation_history},
-                "time": self.time}
+        meta = {"writers": asdict(self.writers), "time": self.time}
         state = {}
         if self.dem is not None:
             state.update(self.dem.state())

@@ -44,14 +44,14 @@ import numpy as np
 import fvdem
 from fvdem.case import case_from_dict
 from fvdem.dem.system import SimulationError
+from validate_umf import SETTINGS, reduced_bed_table
 
-UMF = {"sphere": 1.58, "spherocylinder": 1.7}
 # Error budget of the defaults (docs/speed-accuracy.md): the pressure drop within issue 5's 3 % plateau
 # tolerance, the bed height within 5 %, the void-fraction histogram within a total-variation distance
 # of 0.15 and the mixing entropy within 0.1 at every fixed time -- or within 1.5 x the replica's error
 # where the chaos of a short run alone exceeds that (an error below the noise floor is not resolved).
 BUDGET = {"pressure_drop": 0.03, "bed_height": 0.05, "void_fraction_histogram": 0.15, "mixing_entropy": 0.1}
-PAPER = {"dem_step": 1e-5, "normal_stiffness": 2.0e4, "cfd_step": 1e-4}
+PAPER = SETTINGS["paper"]
 
 
 def dem_factor(f, cfd=1):
@@ -98,34 +98,13 @@ def variants(shape, quick):
 
 
 def build_case(shape, particles, overrides, threads):
-    p = {"shape": shape, "count": particles, "density": 1442.0, "colour": "by_height",
-         "insertion": {"upper": [0.06, 0.06, 0.2], "seed": 7}}
-    coupling = {"drag": "hoelzer-sommerfeld", "voidage": "divided"}
-    if shape == "sphere":
-        p["diameter"] = "5.3 mm"
-    else:
-        p.update(diameter="3 mm", length="12 mm")
-        coupling.update(drag="sanjeevi-padding", lift="sanjeevi-padding", torque="sanjeevi-padding")
-    table = {
-        "name": "speed_accuracy",
-        "domain": {"upper": [0.06, 0.06, 0.45]},
-        "particles": p,
-        "contact": {"normal_stiffness": PAPER["normal_stiffness"], "restitution": 0.43, "friction": 0.46,
-                    "rolling_friction": 0.46},
-        "time": {"dem_step": PAPER["dem_step"], "end": 100.0},
-        "gas": {"enabled": True, "cells": [4, 4, 30], "cfd_step": PAPER["cfd_step"],
-                "inlet_velocity": 2.0 * UMF[shape]},
-        "coupling": coupling,
-        "output": {"progress": False, "mixing_cells": [2, 2, 15]},
-        "run": {"threads": threads},
-    }
-    for dotted, value in overrides.items():
-        node = table
-        *parents, leaf = dotted.split(".")
-        for key in parents:
-            node = node.setdefault(key, {})
-        node[leaf] = value
-    return case_from_dict(table)
+    """validate_umf.py's reduced bed at the paper's settings, AR-4 with the MP closures, two colour
+    layers on a 2 x 2 x 15 mixing grid, with ``overrides`` (dotted keys) applied."""
+    table = reduced_bed_table(shape, "mp", particles, threads)
+    table["name"] = "speed_accuracy"
+    table["particles"]["colour"] = "by_height"
+    table["output"]["mixing_cells"] = [2, 2, 15]
+    return case_from_dict(table, overrides=overrides)
 
 
 def measure(case, spin, window, sample, entropy_times):

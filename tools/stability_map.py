@@ -149,31 +149,35 @@ def voidage_map(cell_over_length, samples=200):
 
 # --------------------------------------------------------------------------- CFD step vs Courant number
 def _column_case(cfd_step, velocity, particles):
+    """The column validated at a CFD step the case check accepts, then given ``cfd_step`` (which it may
+    refuse: the map looks for where the solver itself fails)."""
+    from dataclasses import replace
     from fvdem.case import case_from_dict
-    return case_from_dict({
+    case = case_from_dict({
         "name": "courant", "domain": {"upper": [0.06, 0.06, 0.45]},
         "particles": {"shape": "sphere", "count": particles, "diameter": "5.3 mm", "density": 1442.0,
                       "colour": "single", "fixed": True, "insertion": {"upper": [0.06, 0.06, 0.2], "seed": 7}},
-        "gas": {"enabled": True, "cells": [4, 4, 30], "cfd_step": cfd_step, "inlet_velocity": velocity},
+        "gas": {"enabled": True, "cells": [4, 4, 30], "cfd_step": 1e-5, "inlet_velocity": velocity},
+        "time": {"dem_step": 1e-5},
         "coupling": {"drag": "hoelzer-sommerfeld"}, "output": {"progress": False}, "run": {"threads": 1}})
+    return replace(case, gas=replace(case.gas, cfd_step=cfd_step))
 
 
 def cfd_map(courants, scenes=((3.16, 0), (10.0, 0), (1.5, 1000)), steps=100):
     """The gas column of the reduced bed (0.06 x 0.06 x 0.45 m, 15 mm cells) at CFD steps giving inlet
     Courant numbers ``U dt / dx`` in ``courants``: empty at two inlet velocities, and through a fixed
-    bed of 1,000 spheres, each for ``steps`` steps. The case-file check is bypassed (it refuses
-    inlet Courant numbers above 1) to find where the solver itself fails. Theory: implicit upwind
+    bed of 1,000 spheres, each for ``steps`` steps. The case-file check (it refuses inlet Courant
+    numbers above 1) is bypassed to find where the solver itself fails. Theory: implicit upwind
     convection with implicit pressure is unconditionally stable; the explicit parts (the old-flux
     Rhie-Chow correction, the exact-exchange return) are not, so a failure must scale with the
     Courant number: at the same ``U dt / dx`` for every velocity."""
     import warnings
-    from unittest import mock
     from fvdem.simulation import Simulation
     points = []
     for velocity, particles in scenes:
         for courant in courants:
             dt = courant * 0.015 / velocity
-            with mock.patch("fvdem.case.MAX_INLET_COURANT", float("inf")), warnings.catch_warnings():
+            with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 sim = Simulation(_column_case(dt, velocity, particles))
                 largest, status, reason = 0.0, "stable", None

@@ -87,8 +87,7 @@ def terminal_reynolds(table):
         slip = np.tile([0.0, 0.0, v], (len(axis), 1))
         c = float(model.drag_coefficient(slip, np.ones(len(axis)), axis).mean())
         v = 0.5 * v + 0.5 * weight / c
-    d_e = (6 * p.volume / math.pi) ** (1 / 3)
-    return v * d_e * g.density / g.viscosity
+    return v * p.equivalent_diameter * g.density / g.viscosity
 
 
 def main(argv=None):

@@ -36,9 +36,17 @@ SETTINGS = {"paper": {"normal_stiffness": 2.0e4, "dem_step": 1e-5, "cfd_step": 1
 
 
 def build_case(shape, closures, particles, threads, width=0.06, settings="paper"):
+    return case_from_dict(reduced_bed_table(shape, closures, particles, threads, width, settings))
+
+
+def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings="paper"):
+    """Case table of the reduced bed (also tools/speed_accuracy.py's): seed 000's particles (AR-1, or AR-4
+    with SP or MP closures) in a ``width`` square, 0.45 m column of 15 mm cells at 2 Umf,experiment,
+    inserted below 0.2 m (higher when more particles than 2,000 per 0.06 x 0.06 m need the room)."""
     cells = max(1, round(width / 0.015))
+    height = 0.2 * max(1.0, (0.06 / width) ** 2 * particles / 2000)
     p = {"shape": shape, "count": particles, "density": 1442.0, "colour": "single",
-         "insertion": {"upper": [width, width, 0.2 * (0.06 / width) ** 2 * particles / 2000], "seed": 7}}
+         "insertion": {"upper": [width, width, height], "seed": 7}}
     coupling = {"drag": "hoelzer-sommerfeld"}
     if shape == "sphere":
         p["diameter"] = "5.3 mm"
@@ -48,7 +56,7 @@ def build_case(shape, closures, particles, threads, width=0.06, settings="paper"
         coupling = {"drag": "sanjeevi-padding" if closures == "mp" else "hoelzer-sommerfeld",
                     "lift": name, "torque": name}
     k = SETTINGS[settings]
-    return case_from_dict({
+    return {
         "name": "umf",
         "domain": {"upper": [width, width, 0.45]},
         "particles": p,
@@ -59,7 +67,7 @@ def build_case(shape, closures, particles, threads, width=0.06, settings="paper"
                 "inlet_velocity": 2.0 * EXPERIMENT[shape]},
         "coupling": coupling,
         "output": {"progress": False, "timeseries_interval": 1e-3},
-        "run": {"threads": threads}})
+        "run": {"threads": threads}}
 
 
 def wen_yu(d_p, rho_p):

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .mixing import orientation_angles
+
 
 def settling_velocity(voidage, cell_volumes, fluid_velocity, particle_velocity) -> tuple[float, float]:
     """``((1 - phi) (u_f - u_p), phi)`` along z [m/s]: the settling velocity and the solids fraction
@@ -37,8 +39,7 @@ def velocity_fluctuations(particle_velocity) -> tuple[float, float]:
 def orientation_histogram(axis, bins: int = 18):
     """Density of the angle [rad] between the particle axes and the vertical, folded to [0, pi/2]
     (an axis has no sign). Random orientations give ``sin(angle)``. Returns ``(density, edges)``."""
-    angle = np.arccos(np.clip(np.abs(np.asarray(axis, float)[:, 2]), 0.0, 1.0))
-    return np.histogram(angle, bins=bins, range=(0.0, 0.5 * np.pi), density=True)
+    return np.histogram(orientation_angles(axis), bins=bins, range=(0.0, 0.5 * np.pi), density=True)
 
 
 def steady_window(times, values, batches: int = 10) -> dict:

@@ -132,7 +132,7 @@ class CouplingBridge:
         self.cfd_step = case.gas.cfd_step
         self.rotational_drag = cfg.rotational_drag == "stokes" and not p.fixed
         # Stokes' rotational drag of the volume-equivalent sphere, 8 pi mu r^3 = pi mu d_e^3 [N m s]
-        self._rotational_coefficient = np.pi * case.gas.viscosity * (6.0 * p.volume / np.pi)
+        self._rotational_coefficient = np.pi * case.gas.viscosity * p.equivalent_diameter ** 3
         self.substeps = max(1, round(case.gas.cfd_step / case.time.dem_step))
         self.semi_implicit = cfg.drag_treatment == "semi-implicit"
         self.dem.implicit_drag = self.semi_implicit and not self.fixed

@@ -5,6 +5,7 @@ import warnings
 
 import numpy as np
 
+from ..dem.system import SimulationError
 from .mesh import GasMesh
 from .solver import GasProperties, GasSolver
 
@@ -75,7 +76,6 @@ class GasPhase:
         try:
             info = s.step(self.dt)
         except (RuntimeError, ValueError, FloatingPointError) as exc:  # e.g. a singular factorization
-            from ..dem.system import SimulationError
             if isinstance(exc, SimulationError):
                 raise
             raise SimulationError(f"the gas step diverged ({exc}) at step {self.step_count}; CFD step {self.dt:.3g} s, "
@@ -137,7 +137,6 @@ class GasPhase:
     def check_health(self, time: float) -> None:
         s = self.solver
         if not (np.all(np.isfinite(s.velocity)) and np.all(np.isfinite(s.pressure))):
-            from ..dem.system import SimulationError
             raise SimulationError(f"non-finite gas velocity or pressure at t = {time:.6g} s; CFD step {self.dt:.3g} s, "
                                   f"largest Courant number {self.courant_number():.3g}")
 
