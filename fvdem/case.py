@@ -207,9 +207,12 @@ class GasConfig:
 @dataclass(frozen=True)
 class CouplingConfig:
     enabled: bool = spec(True, kind="bool", doc="exchange momentum between gas and particles (when both are present)")
-    drag: str = spec("hoelzer-sommerfeld", kind="str", choices=("hoelzer-sommerfeld", "sanjeevi-padding", "none"),
+    drag: str = spec("hoelzer-sommerfeld", kind="str",
+                     choices=("hoelzer-sommerfeld", "sanjeevi-padding", "gidaspow", "none"),
                      doc="drag closure: Hoelzer-Sommerfeld with Di Felice's voidage function (single-particle, "
-                         "any shape) or Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders)")
+                         "any shape), Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders), or Gidaspow "
+                         "(Ergun below voidage 0.8 with the sphericity, Wen-Yu above; not a seed 000 closure: it "
+                         "reproduces Ergun's packed-bed pressure drop, docs/validation.md)")
     lift: str = spec("none", kind="str", choices=("none", "zastawny", "sanjeevi-padding"),
                      doc="lift closure (spherocylinders only): Zastawny form with seed 000's Table 3, or "
                          "Sanjeevi-Padding 2020")

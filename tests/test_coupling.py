@@ -268,6 +268,21 @@ def test_uniform_fixed_bed_pressure_gradient_is_the_closure_prediction(tmp_path)
     assert 0.5 < (gradient - RHO * 9.81) / ergun < 1.5
 
 
+def test_uniform_fixed_bed_with_gidaspow_drag_has_ergun_pressure_gradient(tmp_path):
+    """The same lattice bed with coupling.drag = 'gidaspow': model A's fixed-bed gradient n F_D / eps is
+    Ergun's equation exactly (an independent result: Ergun 1952), plus the gas head."""
+    cell, d, u_in = 0.01, 0.005, 0.5
+    case = _fixed_bed_case(tmp_path, _lattice(cell, 8, bottom=0), d, u_in, [4, 4, 8], [0.04, 0.04, 0.08],
+                           drag="gidaspow")
+    sim = fvdem.Simulation(case)
+    sim.gas.solver.tolerance = 1e-11
+    sim.run(1.0)
+    eps = 1.0 - 8 * np.pi / 6 * d ** 3 / cell ** 3
+    gradient = (sim.gas.plane_pressure(0.025) - sim.gas.plane_pressure(0.055)) / 0.03
+    ergun = 150 * (1 - eps) ** 2 * MU * u_in / (eps ** 3 * d ** 2) + 1.75 * (1 - eps) * RHO * u_in ** 2 / (eps ** 3 * d)
+    assert gradient == pytest.approx(ergun + RHO * 9.81, rel=1e-6)
+
+
 def test_held_particle_feels_exactly_the_closure_drag(tmp_path):
     """One sphere held in an upward gas flow: the force the bridge exchanges is the closure's drag at
     the interpolated gas velocity and voidage."""

@@ -4,7 +4,8 @@ A shallow bed of seed 000's particles (spheres, or AR-4 spherocylinders with sin
 multi-particle closures) in a narrow column with seed 000's 15 mm cells is fluidized above Umf,
 then the gas velocity is stepped down to about 0.4 Umf; each velocity is held and the bed pressure
 drop averaged over the second half of the hold. Umf is where the fixed-bed branch (least-squares
-``dP = a U + b U^2``, Ergun's form, through the points below 0.85 W/A) meets the fluidized plateau
+``dP = a U + b U^2``, Ergun's form with a, b >= 0, through the lowest velocities up to the first
+point at 0.85 W/A) meets the fluidized plateau
 (the mean of the points at and above 1.3 x the experimental Umf). Umf is a property of particles
 and gas, so a shallower bed than the paper's may be used: the output says which bed was used.
 
@@ -24,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import fvdem
+from fvdem.analysis.bed import bed_top, core_solids_fraction, uniform_bed_umf
 from fvdem.case import case_from_dict
 from fvdem.coupling.closures import spherocylinder_shape, sphericities
 
@@ -35,16 +37,19 @@ SETTINGS = {"paper": {"normal_stiffness": 2.0e4, "dem_step": 1e-5, "cfd_step": 1
             "default": {"normal_stiffness": 800.0, "dem_step": 5e-5, "cfd_step": 5e-4}}
 
 
-def build_case(shape, closures, particles, threads, width=0.06, settings="paper"):
-    return case_from_dict(reduced_bed_table(shape, closures, particles, threads, width, settings))
+def build_case(shape, closures, particles, threads, width=0.06, settings="paper", drag="paper"):
+    return case_from_dict(reduced_bed_table(shape, closures, particles, threads, width, settings, drag))
 
 
-def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings="paper"):
+def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings="paper", drag="paper"):
     """Case table of the reduced bed (also tools/speed_accuracy.py's): seed 000's particles (AR-1, or AR-4
-    with SP or MP closures) in a ``width`` square, 0.45 m column of 15 mm cells at 2 Umf,experiment,
-    inserted below 0.2 m (higher when more particles than 2,000 per 0.06 x 0.06 m need the room)."""
+    with SP or MP closures) in a ``width`` square column of 15 mm cells at 2 Umf,experiment, inserted
+    below 0.2 m (higher when more particles than 2,000 per 0.06 x 0.06 m need the room); the column is
+    0.45 m tall, or the insertion height + 0.3 m for deeper beds. ``drag = "gidaspow"`` replaces the
+    paper's drag closure by Gidaspow's (Ergun / Wen-Yu), keeping lift and torque."""
     cells = max(1, round(width / 0.015))
     height = 0.2 * max(1.0, (0.06 / width) ** 2 * particles / 2000)
+    column = max(0.45, 0.015 * np.ceil((height + 0.3) / 0.015))
     p = {"shape": shape, "count": particles, "density": 1442.0, "colour": "single",
          "insertion": {"upper": [width, width, height], "seed": 7}}
     coupling = {"drag": "hoelzer-sommerfeld"}
@@ -55,15 +60,17 @@ def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings=
         name = "sanjeevi-padding" if closures == "mp" else "zastawny"
         coupling = {"drag": "sanjeevi-padding" if closures == "mp" else "hoelzer-sommerfeld",
                     "lift": name, "torque": name}
+    if drag != "paper":
+        coupling["drag"] = drag
     k = SETTINGS[settings]
     return {
         "name": "umf",
-        "domain": {"upper": [width, width, 0.45]},
+        "domain": {"upper": [width, width, float(column)]},
         "particles": p,
         "contact": {"normal_stiffness": k["normal_stiffness"], "restitution": 0.43, "friction": 0.46,
                     "rolling_friction": 0.46},
         "time": {"dem_step": k["dem_step"], "end": 100.0},
-        "gas": {"enabled": True, "cells": [cells, cells, 30], "cfd_step": k["cfd_step"],
+        "gas": {"enabled": True, "cells": [cells, cells, int(round(column / 0.015))], "cfd_step": k["cfd_step"],
                 "inlet_velocity": 2.0 * EXPERIMENT[shape]},
         "coupling": coupling,
         "output": {"progress": False, "timeseries_interval": 1e-3},
@@ -98,10 +105,17 @@ def fit_umf(velocity, drop, weight, umf_experiment):
     velocity, drop = np.asarray(velocity), np.asarray(drop)
     fluidized = velocity >= 1.3 * umf_experiment
     plateau = float(drop[fluidized].mean())
-    fixed = drop < 0.85 * weight
+    # the fixed-bed branch: the lowest velocities up to the first point at 0.85 W/A (a slugging bed's
+    # short-hold average can dip below that at high velocity; it is not part of the branch)
+    order = np.argsort(velocity)
+    below = drop[order] < 0.85 * weight
+    count = len(below) if below.all() else int(np.argmin(below))
+    fixed = np.zeros(len(velocity), bool)
+    fixed[order[:count]] = True
     if fixed.sum() >= 2:
+        from scipy.optimize import nnls  # Ergun's form: both coefficients non-negative
         design = np.stack([velocity[fixed], velocity[fixed] ** 2], axis=1)
-        (a, b), *_ = np.linalg.lstsq(design, drop[fixed], rcond=None)
+        (a, b), _ = nnls(design, drop[fixed])
     elif fixed.sum() == 1:
         a, b = drop[fixed][0] / velocity[fixed][0], 0.0
     else:
@@ -126,6 +140,9 @@ def main(argv=None):
                         "scale --particles with the cross-section to keep the bed height")
     parser.add_argument("--settings", choices=tuple(SETTINGS), default="paper",
                         help="contact stiffness, DEM and CFD steps: seed 000's or fvdem's defaults")
+    parser.add_argument("--drag", choices=("paper", "gidaspow"), default="paper",
+                        help="drag closure: seed 000's (Hoelzer-Sommerfeld + Di Felice, or Sanjeevi-Padding for "
+                             "--closures mp) or Gidaspow's (Ergun / Wen-Yu) for comparison")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
@@ -134,7 +151,7 @@ def main(argv=None):
     wall0, cpu0 = time.perf_counter(), time.process_time()
     shape = args.shape
     umf_exp = EXPERIMENT[shape]
-    case = build_case(shape, args.closures, args.particles, args.threads, args.width, args.settings)
+    case = build_case(shape, args.closures, args.particles, args.threads, args.width, args.settings, args.drag)
     sim = fvdem.Simulation(case)
     weight = sim.bed_weight_per_area()
     sim.run(args.start)
@@ -153,11 +170,17 @@ def main(argv=None):
     velocity = [c["velocity"] for c in curve]
     drop = [c["pressure_drop"] for c in curve]
     plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp)
+    umf_at_weight = None
+    if umf is not None:  # the fixed-bed branch against W/A itself rather than the measured plateau
+        umf_at_weight = float(weight / a if abs(b) < 1e-12 else (-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b))
     p = case.particles
     d_p = float(spherocylinder_shape(p.diameter, p.length or p.diameter)[0])
     phi = float(sphericities(p.diameter, p.length or p.diameter, 0.0)[0])
-    packed = sim.summary().get("solids_fraction", 0.6)
+    packing = packed_state(sim)
+    closure_umf = uniform_bed_umf(sim.bridge.model, 1.0 - packing["solids_fraction"], packing["axes"], p.density)
     tag = shape if shape == "sphere" else f"{shape}_{args.closures}"
+    if args.drag != "paper":
+        tag += f"_{args.drag}"
     png = Path(args.out) / f"umf_{tag}.png"
     _plot(png, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag)
     result = {
@@ -166,15 +189,37 @@ def main(argv=None):
         "relative_error": None if umf is None else (umf - umf_exp) / umf_exp,
         "plateau_over_weight": plateau / weight,
         "umf_wen_yu": wen_yu(d_p, p.density),
-        "umf_ergun_at_packed_voidage": ergun_umf(d_p, p.density, 1.0 - 0.6, phi),
-        "bed": f"{p.count} particles in a {args.width:g} x {args.width:g} m column, 15 mm cells (shallower than the "
-               "paper's 32,500 in 0.15 x 0.15 m; Umf is a property of particles and gas)",
+        "umf_at_weight": umf_at_weight,
+        "drag": case.coupling.drag,
+        "packed_solids_fraction": packing["solids_fraction"],
+        "packed_bed_height": packing["bed_top"],
+        "axis_sin2_from_vertical": packing["sin2"],
+        "umf_closure_uniform_bed": closure_umf,
+        "umf_ergun_at_packed_voidage": ergun_umf(d_p, p.density, 1.0 - packing["solids_fraction"], phi),
+        "bed": f"{p.count} particles in a {args.width:g} x {args.width:g} m column, 15 mm cells, packed height "
+               f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
+               "property of particles and gas)",
         "settings": args.settings,
         "hold_seconds": args.hold, "curve": curve, "plot": str(png),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
-        "packed_solids_fraction_last": packed,
     }
     print(json.dumps(result) if args.json else json.dumps(result, indent=2))
+
+
+def packed_state(sim):
+    """The defluidized bed at the end of the ramp: solids fraction of its core (bottom and top fifth
+    left out, wall regions kept: the gas sees the whole cross-section), the bed top [m], the core
+    particles' axes and their mean sin^2 of the angle from the vertical (the flow direction)."""
+    p = sim.particles
+    box = sim.case.domain
+    args = (p.position, p.axis, p.radius, p.half_length)
+    top = bed_top(*args)
+    fraction = core_solids_fraction(*args, box.lower, box.upper, box.periodic, top=top, wall_margin=0.0)
+    z = p.position[:, 2]
+    core = (z > box.lower[2] + 0.2 * (top - box.lower[2])) & (z < box.lower[2] + 0.8 * (top - box.lower[2]))
+    axes = p.axis[core]
+    return {"solids_fraction": fraction, "bed_top": top, "axes": axes,
+            "sin2": None if np.all(p.half_length == 0) else float(1.0 - np.mean(axes[:, 2] ** 2))}
 
 
 def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag):

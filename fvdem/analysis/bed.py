@@ -57,3 +57,32 @@ def packed_bed_summary(particles, box) -> dict:
         "bed_height": solid / (area * fraction) if fraction > 0 else float("nan"),
         "mean_solids_fraction_below_top": solid / (area * (top - box.lower[2])),
     }
+
+
+def uniform_bed_umf(model, voidage, axes, particle_density, gravity=9.81):
+    """Minimum fluidization velocity [m/s] that the drag closure ``model`` (a
+    ``coupling.bridge.HydrodynamicModel``) gives a uniform fixed bed of gas fraction ``voidage``, with
+    the particle axes ``axes`` (N, 3) and vertical flow: the superficial velocity ``U`` at which the mean
+    drag holds the bed's weight, ``<c(U/eps)> U/eps = eps V_p (rho_p - rho_f) g``.
+
+    In model A (``-eps grad p`` in the gas, ``-V_p grad p`` on the particles) the pressure gradient of a
+    fixed bed is ``n <F_D> / eps``; it equals the bed weight per volume ``eps_s (rho_p - rho_f) g`` when the
+    drag is ``eps`` times the buoyant weight. This is the closure's own Umf, independent of the CFD-DEM
+    solution: a simulated defluidization ramp of a deep, wide bed approaches it; a shallow or narrow
+    bed lies above it (looser bottom layer and bed surface, channelling along the walls).
+    """
+    from scipy.optimize import brentq
+
+    from ..coupling.closures import spherocylinder_shape
+    axes = np.atleast_2d(np.asarray(axes, float))
+    eps = np.full(len(axes), float(voidage))
+    volume = float(spherocylinder_shape(model.diameter, max(model.length, model.diameter))[1])
+    held = voidage * volume * (particle_density - model.density) * gravity
+
+    def excess(superficial):
+        u = superficial / voidage
+        slip = np.zeros_like(axes)
+        slip[:, 2] = u
+        return float(np.mean(model.drag_coefficient(slip, eps, axes)) * u - held)
+
+    return float(brentq(excess, 1e-6, 100.0, xtol=1e-9))

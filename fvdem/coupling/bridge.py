@@ -72,6 +72,9 @@ class HydrodynamicModel:
             return np.zeros(len(slip))
         if self.drag == "sanjeevi-padding":
             return closures.multi_particle_drag_coefficient(slip, voidage, axis, d_p, rho, mu)
+        if self.drag == "gidaspow":
+            sphericity = 1.0 if self.is_sphere else float(closures.sphericities(self.diameter, self.length, 0.0)[0])
+            return closures.gidaspow_drag_coefficient(slip, voidage, d_p, rho, mu, sphericity)
         if self.is_sphere:
             return closures.single_particle_drag_coefficient(slip, voidage, d_p, rho, mu)
         theta = closures.incidence_angle(axis, slip)

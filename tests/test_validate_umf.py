@@ -1,0 +1,45 @@
+"""tools/validate_umf.py: the Umf fit on synthetic defluidization curves (the ramp itself is a tool run)."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+import validate_umf as tool  # noqa: E402
+
+
+def _ramp(a, b, weight, umf_exp, dips=()):
+    ratios = np.array([2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4])
+    velocity = ratios * umf_exp
+    drop = np.minimum(a * velocity + b * velocity ** 2, weight)
+    for index, value in dips:  # a slugging bed's short-hold mean below W/A
+        drop[index] = value
+    return velocity, drop
+
+
+def test_fit_recovers_the_intersection_of_an_ergun_branch_with_the_plateau():
+    a, b, weight = 150.0, 400.0, 1600.0
+    velocity, drop = _ramp(a, b, weight, 1.58)
+    plateau, umf, (fa, fb) = tool.fit_umf(velocity, drop, weight, 1.58)
+    exact = (-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b)
+    assert plateau == pytest.approx(weight)
+    assert (fa, fb) == pytest.approx((a, b), rel=1e-9)
+    assert umf == pytest.approx(exact, rel=1e-9)
+
+
+def test_a_slugging_dip_above_umf_is_not_taken_for_the_fixed_branch():
+    a, b, weight = 150.0, 400.0, 1600.0
+    velocity, drop = _ramp(a, b, weight, 1.58, dips=[(1, 0.72 * weight)])
+    plateau, umf, (fa, fb) = tool.fit_umf(velocity, drop, weight, 1.58)
+    exact = (-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b)
+    assert (fa, fb) == pytest.approx((a, b), rel=1e-9)  # the dip at 1.7 Umf_exp is left out of the branch
+    assert plateau < weight
+    assert umf < exact  # the lower plateau is met earlier; umf_at_weight in the tool's output uses W/A
+
+
+def test_fixed_branch_coefficients_are_non_negative():
+    velocity = np.array([3.0, 2.0, 1.0, 0.8, 0.6, 0.4])
+    drop = np.array([1000.0, 1000.0, 700.0, 600.0, 480.0, 330.0])  # concave: an unconstrained b < 0
+    _, umf, (fa, fb) = tool.fit_umf(velocity, drop, 1000.0, 1.5)
+    assert fa >= 0 and fb >= 0 and np.isfinite(umf)
