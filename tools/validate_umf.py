@@ -6,8 +6,15 @@ then the gas velocity is stepped down to about 0.4 Umf; each velocity is held an
 drop averaged over the second half of the hold. Umf is where the fixed-bed branch (least-squares
 ``dP = a U + b U^2``, Ergun's form with a, b >= 0, through the lowest velocities up to the first
 point at 0.85 W/A) meets the fluidized plateau
-(the mean of the points at and above 1.3 x the experimental Umf). Umf is a property of particles
-and gas, so a shallower bed than the paper's may be used: the output says which bed was used.
+(the mean of the points at and above 1.3 x the experimental Umf); ``umf_at_weight`` meets W/A itself.
+Umf is a property of particles and gas, so a shallower bed than the paper's may be used: the output
+says which bed was used (``--width 0.15 --particles 32500`` is the paper's own bed).
+
+The output also separates the closure from the CFD-DEM solution: the packing of the defluidized bed
+(core solids fraction, wall regions kept; mean sin^2 of the rods' angle from the vertical) and
+``umf_closure_uniform_bed``, the velocity at which the drag closure alone holds a uniform bed of that
+packing (``fvdem.analysis.bed.uniform_bed_umf``), next to Ergun's at the same packing. ``--drag gidaspow``
+repeats the ramp with Gidaspow's closure (Ergun / Wen-Yu) instead of seed 000's.
 
     python tools/validate_umf.py --shape sphere --json
     python tools/validate_umf.py --shape spherocylinder --closures mp --json
@@ -145,7 +152,12 @@ def main(argv=None):
                              "--closures mp) or Gidaspow's (Ergun / Wen-Yu) for comparison")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
+                        help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
     args = parser.parse_args(argv)
+    if args.combine:
+        print(_combined_plot(Path(args.out) / "umf_compare.png", args.combine))
+        return
     if args.quick:
         args.particles, args.hold, args.start = 500, 0.06, 0.15
     wall0, cpu0 = time.perf_counter(), time.process_time()
@@ -220,6 +232,34 @@ def packed_state(sim):
     axes = p.axis[core]
     return {"solids_fraction": fraction, "bed_top": top, "axes": axes,
             "sin2": None if np.all(p.half_length == 0) else float(1.0 - np.mean(axes[:, 2] ** 2))}
+
+
+def _combined_plot(path, outputs):
+    """Pressure drop / (W/A) against U / Umf,experiment of several ramps on one chart, each with its
+    simulated Umf (dotted) and its closure's uniform-bed Umf at the ramp's packing (a triangle on 1)."""
+    from fvdem.analysis.plots import _pyplot, _save
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name in outputs:
+        r = json.loads(Path(name).read_text().strip().splitlines()[-1])
+        exp = r["umf_experiment"]
+        u = np.array([c["velocity"] for c in r["curve"]]) / exp
+        shape = "AR-1" if r["shape"] == "sphere" else f"AR-4 {r['closures'].upper()}"
+        width = r["bed"].split(" column")[0].split("in a ")[-1]
+        label = (f"{shape}, {r['drag']}, {r['bed'].split(' particles')[0]} in {width} ({r['settings']}): "
+                 f"Umf {r['umf_simulated']:.2f} m/s ({r['relative_error']:+.0%})")
+        line, = ax.plot(u, [c["over_weight"] for c in r["curve"]], "o-", ms=3, label=label)
+        ax.axvline(r["umf_simulated"] / exp, color=line.get_color(), ls=":", lw=1)
+        ax.plot([r["umf_closure_uniform_bed"] / exp], [1.0], "v", color=line.get_color(), ms=8)
+    ax.axvline(1.0, color="k", lw=1.2, label="Umf measured (1.58 m/s AR-1, 1.7 m/s AR-4)")
+    ax.axvspan(0.9, 1.1, color="k", alpha=0.07, label="within 10 %")
+    ax.axhline(1.0, color="k", lw=0.5)
+    ax.set_xlabel("U / Umf,experiment")
+    ax.set_ylabel("bed pressure drop / (W/A)")
+    ax.set_title("defluidization ramps; triangles: the closure's own Umf at the ramp's packing", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6.5, loc="lower right")
+    return _save(fig, path)
 
 
 def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag):
