@@ -97,6 +97,14 @@ def single_particle_drag(slip, voidage, d_p, rho, mu, phi=1.0, crosswise=1.0, le
 GIDASPOW_SWITCH = 0.8  # voidage below which Ergun applies, above it Wen-Yu (Gidaspow 1994)
 
 
+def ergun_beta_per_solids(voidage, speed, d, rho, mu):
+    """Ergun's (1952) interphase coefficient divided by the solids fraction, ``beta / eps_s``
+    [kg/(m^3 s)] = ``150 eps_s mu / (eps d^2) + 1.75 rho |u| / d`` at the interstitial slip speed ``|u|``
+    [m/s] and diameter ``d`` [m]. In model A a uniform fixed bed then has Ergun's pressure gradient
+    ``eps_s (beta / eps_s) |u| / eps``. Kept per solids fraction so that it stays finite at ``eps = 1``."""
+    return 150.0 * (1.0 - voidage) * mu / (voidage * d ** 2) + 1.75 * rho * speed / d
+
+
 def gidaspow_drag_coefficient(slip, voidage, d_p, rho, mu, sphericity=1.0):
     """Drag coefficient ``c`` [kg/s] (N,) with ``F = c u`` of Gidaspow (1994), as in MFiX's GIDASPOW and
     CFDEMcoupling's GidaspowDrag: not one of seed 000's closures, an alternative for dense beds.
@@ -116,12 +124,10 @@ def gidaspow_drag_coefficient(slip, voidage, d_p, rho, mu, sphericity=1.0):
     """
     slip, speed, re = _slip_state(slip, voidage, d_p, rho, mu)
     eps = np.broadcast_to(np.asarray(voidage, float), speed.shape)
-    solids = 1.0 - eps
     volume = np.pi / 6.0 * d_p ** 3
-    d_e = sphericity * d_p
-    ergun_per_solids = 150.0 * solids * mu / (eps * d_e ** 2) + 1.75 * rho * speed / d_e  # beta / eps_s
+    ergun_per_solids = ergun_beta_per_solids(eps, speed, sphericity * d_p, rho, mu)
     cd_re = np.where(re < 1000.0, 24.0 * (1.0 + 0.15 * re ** 0.687), 0.44 * re)  # C_D Re_s, finite at Re -> 0
-    wen_yu_per_solids = 0.75 * cd_re * mu / (eps * d_p ** 2) * eps * eps ** -2.65  # C_D |u| rho / d = C_D Re mu / (eps d^2)
+    wen_yu_per_solids = 0.75 * cd_re * mu / d_p ** 2 * eps ** -2.65  # 3/4 C_D eps rho |u| / d_p = 3/4 C_D Re_s mu / d_p^2
     return volume * np.where(eps < GIDASPOW_SWITCH, ergun_per_solids, wen_yu_per_solids)
 
 

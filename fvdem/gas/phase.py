@@ -5,6 +5,7 @@ import warnings
 
 import numpy as np
 
+from ..coupling.closures import ergun_beta_per_solids
 from ..dem.system import SimulationError
 from .mesh import GasMesh
 from .solver import GasProperties, GasSolver
@@ -63,10 +64,9 @@ class GasPhase:
         if not self.zone.any():
             return
         z = self.config.porous_zone
-        solids = 1.0 - z.voidage
         speed = np.linalg.norm(self.solver.velocity[self.zone], axis=1)
-        self.solver.beta[self.zone] += (150.0 * solids ** 2 * self.config.viscosity / (z.voidage * z.particle_diameter ** 2)
-                                       + 1.75 * solids * self.config.density * speed / z.particle_diameter)
+        self.solver.beta[self.zone] += (1.0 - z.voidage) * ergun_beta_per_solids(
+            z.voidage, speed, z.particle_diameter, self.config.density, self.config.viscosity)
 
     def step(self) -> dict:
         s = self.solver
@@ -123,12 +123,9 @@ class GasPhase:
             a, b = lo + inset, hi - inset
             diag["porous_zone_pressure_gradient"] = ((self.plane_pressure(a) - self.plane_pressure(b))
                                                      / (self.layer_height(b) - self.layer_height(a)))
-            u = self.config.inlet_velocity
-            solids = 1.0 - zone.voidage
-            diag["ergun_pressure_gradient"] = (150 * solids ** 2 * self.config.viscosity * u
-                                               / (zone.voidage ** 3 * zone.particle_diameter ** 2)
-                                               + 1.75 * solids * self.config.density * u ** 2
-                                               / (zone.voidage ** 3 * zone.particle_diameter))
+            slip = self.config.inlet_velocity / zone.voidage  # interstitial speed in the zone
+            diag["ergun_pressure_gradient"] = ((1.0 - zone.voidage) * slip / zone.voidage * ergun_beta_per_solids(
+                zone.voidage, slip, zone.particle_diameter, self.config.density, self.config.viscosity))
             # the measured gradient also carries the gas's own weight: -dp/dz = beta u / eps - rho g_z
             diag["expected_pressure_gradient"] = (diag["ergun_pressure_gradient"]
                                                   - self.config.density * self.solver.gravity[2])
