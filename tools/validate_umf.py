@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import fvdem
-from fvdem.analysis.bed import bed_top, core_solids_fraction, uniform_bed_umf
+from fvdem.analysis.bed import bed_top, core_particles, core_solids_fraction, uniform_bed_umf
 from fvdem.case import case_from_dict
 from fvdem.coupling.closures import spherocylinder_shape, sphericities
 
@@ -95,7 +95,12 @@ def ergun_umf(d_p, rho_p, voidage, sphericity):
     weight = (1 - voidage) * (rho_p - RHO) * G
     a = 150 * (1 - voidage) ** 2 * MU / (voidage ** 3 * (sphericity * d_p) ** 2)
     b = 1.75 * (1 - voidage) * RHO / (voidage ** 3 * sphericity * d_p)
-    return float((-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b))
+    return branch_crossing(a, b, weight)
+
+
+def branch_crossing(a, b, level):
+    """Velocity [m/s] at which Ergun's form ``a U + b U^2`` (a, b >= 0) reaches ``level``."""
+    return float(level / a if abs(b) < 1e-12 else (-a + np.sqrt(a * a + 4 * b * level)) / (2 * b))
 
 
 def mean_pressure_drop(sim, hold, sample=5e-4):
@@ -127,11 +132,7 @@ def fit_umf(velocity, drop, weight, umf_experiment):
         a, b = drop[fixed][0] / velocity[fixed][0], 0.0
     else:
         return plateau, None, (0.0, 0.0)
-    if abs(b) < 1e-12:
-        umf = plateau / a
-    else:
-        umf = (-a + np.sqrt(a * a + 4 * b * plateau)) / (2 * b)
-    return plateau, float(umf), (float(a), float(b))
+    return plateau, branch_crossing(a, b, plateau), (float(a), float(b))
 
 
 def main(argv=None):
@@ -182,9 +183,8 @@ def main(argv=None):
     velocity = [c["velocity"] for c in curve]
     drop = [c["pressure_drop"] for c in curve]
     plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp)
-    umf_at_weight = None
-    if umf is not None:  # the fixed-bed branch against W/A itself rather than the measured plateau
-        umf_at_weight = float(weight / a if abs(b) < 1e-12 else (-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b))
+    # the fixed-bed branch against W/A itself rather than the measured plateau
+    umf_at_weight = None if umf is None else branch_crossing(a, b, weight)
     p = case.particles
     d_p = float(spherocylinder_shape(p.diameter, p.length or p.diameter)[0])
     phi = float(sphericities(p.diameter, p.length or p.diameter, 0.0)[0])
@@ -227,8 +227,7 @@ def packed_state(sim):
     args = (p.position, p.axis, p.radius, p.half_length)
     top = bed_top(*args)
     fraction = core_solids_fraction(*args, box.lower, box.upper, box.periodic, top=top, wall_margin=0.0)
-    z = p.position[:, 2]
-    core = (z > box.lower[2] + 0.2 * (top - box.lower[2])) & (z < box.lower[2] + 0.8 * (top - box.lower[2]))
+    core, _ = core_particles(*args, box.lower, box.upper, box.periodic, top=top, wall_margin=0.0)
     axes = p.axis[core]
     return {"solids_fraction": fraction, "bed_top": top, "axes": axes,
             "sin2": None if np.all(p.half_length == 0) else float(1.0 - np.mean(axes[:, 2] ** 2))}

@@ -22,6 +22,18 @@ def core_solids_fraction(position, axis, radius, half_length, lower, upper, peri
     by the region's volume. The core excludes ``wall_margin`` [m] (default 2 particle lengths) next to
     side walls and the bottom and top 20 % of the bed, where packing is ordered or loose.
     """
+    inside, region = core_particles(position, axis, radius, half_length, lower, upper, periodic, floor, top,
+                                    wall_margin)
+    if inside is None:
+        return float("nan")
+    volume = spherocylinder_volume(radius[inside], half_length[inside]).sum()
+    return float(volume / region)
+
+
+def core_particles(position, axis, radius, half_length, lower, upper, periodic, floor=None, top=None,
+                   wall_margin=None):
+    """Mask of the particles whose centres lie in the bed core (as ``core_solids_fraction`` defines it)
+    and the core's volume [m^3]; ``(None, 0.0)`` when the margins leave no core."""
     lower = np.asarray(lower, float)
     upper = np.asarray(upper, float)
     extent = float(np.max(2.0 * (radius + half_length)))
@@ -38,10 +50,8 @@ def core_solids_fraction(position, axis, radius, half_length, lower, upper, peri
     lo[2] = floor + 0.2 * height
     hi[2] = floor + 0.8 * height
     if np.any(hi <= lo):
-        return float("nan")
-    inside = np.all((position >= lo) & (position < hi), axis=1)
-    volume = spherocylinder_volume(radius[inside], half_length[inside]).sum()
-    return float(volume / np.prod(hi - lo))
+        return None, 0.0
+    return np.all((position >= lo) & (position < hi), axis=1), float(np.prod(hi - lo))
 
 
 def packed_bed_summary(particles, box) -> dict:
