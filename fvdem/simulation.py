@@ -289,7 +289,8 @@ class Simulation:
         sigma_z, sigma_h = velocity_fluctuations(p.velocity)
         d_e = self.case.particles.equivalent_diameter
         momentum = float((p.mass * p.velocity[:, 2]).sum()
-                         + g.density * (s.voidage * self.gas.mesh.cell_volumes * s.velocity[:, 2]).sum())
+                         + g.density * (s.voidage * self.gas.mesh.cell_volumes * s.velocity[:, 2]).sum()
+                         + self.gas.returned_momentum[:, 2].sum())
         return {"slip_reynolds": settling * d_e * g.density / g.viscosity, "settling_velocity": settling,
                 "solids_fraction": phi, "velocity_fluctuation_vertical": sigma_z,
                 "velocity_fluctuation_horizontal": sigma_h, "mixture_momentum_z": momentum}

@@ -22,9 +22,11 @@ Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
    integrate ``c (u - v)`` implicitly (``implicit_drag``) and hold ``-V_p grad p`` + lift and the
    torque; the kicks record the drag impulse they apply.
 5. **Exact exchange**: the gas lost ``V (beta u - S) dt`` per cell, the particles gained the
-   recorded impulse; the (small) difference — from contact forces changing within the interval —
-   is returned to the gas velocity, so that gas plus particle momentum changes by the external
-   forces only, to round-off.
+   recorded impulse; the difference — from contact forces changing within the interval — is
+   returned to the gas as a source of its next step (``GasPhase.returned_momentum``; added to the
+   cell velocities directly it bypassed the pressure correction and broke continuity by several
+   per cent), so that gas plus particle momentum, the pending return included, changes by the
+   external forces only, to round-off.
 
 Torque is not fed back to the gas (MODEL.md §2). A sphere case evaluates no lift or torque.
 """
@@ -200,7 +202,7 @@ class CouplingBridge:
         external = np.zeros_like(slip)
         volume = self.particle_volume()[:, None]
         if cfg.pressure_gradient_force:
-            external -= volume * grid_map.gather(s._pressure_gradient(s.pressure))
+            external -= volume * grid_map.gather(s.pressure_gradient())
         if np.any(gas.mean_pressure_gradient):  # an imposed mean gradient acts on both phases
             external += volume * gas.mean_pressure_gradient
         pressure_force = external.sum(axis=0)
@@ -232,7 +234,7 @@ class CouplingBridge:
             if lift is not None:
                 lost -= grid_map.scatter(lift) * dt  # the lift is explicit on both sides: not in the balance
             difference = lost - grid_map.scatter(impulse)
-            s.velocity += difference / (gas.config.density * s.voidage[:, None] * volume_cells)
+            gas.returned_momentum += difference  # a source of the next gas step
             returned = float(np.abs(difference.sum(axis=0)).max())
         drag_force = explicit_drag.sum(axis=0) if impulse is None else impulse.sum(axis=0) / dt
         self.last.update(drag_force=drag_force, pressure_force=pressure_force, momentum_returned=returned)

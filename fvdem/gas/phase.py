@@ -44,6 +44,10 @@ class GasPhase:
         n = self.mesh.cell_count
         self.exchange_beta = np.zeros(n)  # set by the coupling bridge [kg/(m^3 s)]
         self.exchange_source = np.zeros((n, 3))  # [N/m^3]
+        # momentum the coupling returns to the gas [N s] per cell (C, 3), applied as a source over the
+        # next step (so that it passes through the pressure correction, not into the cell velocity
+        # unprojected); part of the gas's momentum until then
+        self.returned_momentum = np.zeros((n, 3))
         self._body_force = np.asarray(g.body_force, float)
         self.mean_pressure_gradient = np.asarray(g.mean_pressure_gradient, float)
         self._courant_warned = False
@@ -72,7 +76,9 @@ class GasPhase:
         s = self.solver
         s.beta[:] = self.exchange_beta
         self._update_porous_zone()
-        s.source[:] = self._body_force + s.voidage[:, None] * self.mean_pressure_gradient + self.exchange_source
+        s.source[:] = (self._body_force + s.voidage[:, None] * self.mean_pressure_gradient + self.exchange_source
+                       + self.returned_momentum / (self.mesh.cell_volumes[:, None] * self.dt))
+        self.returned_momentum[:] = 0.0
         try:
             info = s.step(self.dt)
         except (RuntimeError, ValueError, FloatingPointError) as exc:  # e.g. a singular factorization
@@ -110,9 +116,9 @@ class GasPhase:
         first = self.plane_pressure(z.min())
         diag = {"gas_max_speed": float(np.linalg.norm(s.velocity, axis=1).max()), "gas_inlet_pressure": first}
         if not s.periodic:
-            # pressure drop from the inlet face (extrapolated as the solver's gradient takes it) to
+            # pressure drop from the inlet face (the face pressure the solver's gradient takes) to
             # the last cell layer, less the gas head: what the particles (and wall friction) hold up [Pa]
-            inlet = first + 0.5 * (first - self.plane_pressure(z.min() + self.mesh.spacing[2]))
+            inlet = s.inlet_pressure()
             inlet_height = z.min() - 0.5 * self.mesh.spacing[2]
             diag["bed_pressure_drop"] = (inlet - self.plane_pressure(z.max())
                                          + self.config.density * s.gravity[2] * (z.max() - inlet_height))
@@ -146,6 +152,9 @@ class GasPhase:
         s = self.solver
         state = {"gas.velocity": s.velocity, "gas.pressure": s.pressure, "gas.face_flux": s.face_flux,
                  "gas.voidage": s.voidage, "gas.beta": s.beta,
+                 "gas.face_pressure": s.face_pressure if s.face_pressure is not None else np.zeros(0),
+                 "gas.gradient_correction": s.gradient_correction,
+                 "gas.returned_momentum": self.returned_momentum,
                  "gas.counters": np.array([self.step_count, s._steps_since_factor, s.factorizations])}
         if s._pressure_lu is not None:  # the preconditioner's matrix, to refactor it identically
             m = s._pressure_factor_matrix
@@ -157,6 +166,12 @@ class GasPhase:
         s = self.solver
         for name in ("velocity", "pressure", "face_flux", "voidage", "beta"):
             setattr(s, name, np.array(data[f"gas.{name}"], copy=True))
+        face_pressure = np.array(data["gas.face_pressure"], copy=True) if "gas.face_pressure" in data else np.zeros(0)
+        s.face_pressure = face_pressure if len(face_pressure) else None
+        if "gas.returned_momentum" in data:
+            self.returned_momentum = np.array(data["gas.returned_momentum"], copy=True)
+        if "gas.gradient_correction" in data:
+            s.gradient_correction = np.array(data["gas.gradient_correction"], copy=True)
         s.voidage_old = s.voidage.copy()
         self.step_count, since_factor, s.factorizations = (int(v) for v in data["gas.counters"])
         if "gas.preconditioner.data" in data:
