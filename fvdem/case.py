@@ -13,6 +13,7 @@ from __future__ import annotations
 import copy
 import difflib
 import math
+import re
 import tomllib
 from dataclasses import MISSING, dataclass, field, fields, replace
 from pathlib import Path
@@ -72,7 +73,7 @@ class InsertionConfig:
     orientation: str = spec("random", kind="str", choices=("random", "vertical", "horizontal"),
                             doc="axis orientation of inserted spherocylinders")
     gap: float = spec(0.0, unit="length", ge=0.0, doc="extra clearance between inserted particles [m]")
-    seed: int = spec(1, kind="int", ge=0, doc="random seed")
+    seed: int = spec(1, kind="int", ge=0, le=2**32 - 1, doc="random seed")
     method: str = spec("sequential", kind="str", choices=("sequential", "compress"),
                         doc="'sequential': random sequential insertion (up to a solids fraction of about 0.35 of "
                             "the region); 'compress': fully periodic boxes only, insertion into a larger box "
@@ -82,7 +83,7 @@ class InsertionConfig:
 @dataclass(frozen=True)
 class ParticlesConfig:
     shape: str = spec("sphere", kind="str", choices=("sphere", "spherocylinder"))
-    count: int = spec(1000, kind="int", ge=0, doc="number of particles (0: a gas-only case)")
+    count: int = spec(1000, kind="int", ge=0, le=10**9, doc="number of particles (0: a gas-only case)")
     diameter: float = spec(5.3e-3, unit="length", gt=0.0, doc="sphere or cylinder diameter [m]")
     length: float | None = spec(None, unit="length", gt=0.0, optional=True,
                                 doc="spherocylinder length including caps [m] (> diameter)")
@@ -175,7 +176,7 @@ class PorousZoneConfig:
 @dataclass(frozen=True)
 class GasConfig:
     enabled: bool = spec(False, kind="bool", doc="solve the gas phase (FiPy grid over the domain)")
-    cells: tuple = spec((10, 10, 70), kind="int3", ge=1, doc="grid cells along x, y, z")
+    cells: tuple = spec((10, 10, 70), kind="int3", ge=1, le=10000, doc="grid cells along x, y, z")
     density: float = spec(1.2, unit="density", gt=0.0, doc="gas density [kg/m^3]")
     viscosity: float = spec(1.568e-5, gt=0.0, doc="dynamic viscosity [Pa s]")
     inlet_velocity: float = spec(0.0, unit="velocity", ge=0.0,
@@ -190,7 +191,7 @@ class GasConfig:
                            doc="CFD time step [s] = coupling interval (default from the speed-accuracy front; "
                                "seed 000: 1e-4)")
     scheme: str = spec("piso", kind="str", choices=("piso", "simple"), doc="pressure-velocity coupling")
-    correctors: int = spec(2, kind="int", ge=1, doc="PISO pressure corrections per step")
+    correctors: int = spec(2, kind="int", ge=1, le=100, doc="PISO pressure corrections per step")
     linear_solver: str = spec("iterative", kind="str", choices=("iterative", "direct"))
     linear_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0, doc="relative tolerance of the linear solves")
     simple_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0,
@@ -223,7 +224,7 @@ class CouplingConfig:
                         doc="voidage mapping: 'divided' (satellite points along the axis, each to its cell), "
                             "'centroid' (whole particle to the cell of its centre), 'trilinear' (satellite "
                             "points spread over the 8 nearest cell centres, the transpose of the interpolation)")
-    satellites: int = spec(5, kind="int", ge=1, doc="satellite points along a spherocylinder's axis")
+    satellites: int = spec(5, kind="int", ge=1, le=1000, doc="satellite points along a spherocylinder's axis")
     minimum_voidage: float = spec(0.2, gt=0.0, lt=1.0, doc="voidage floor; cells below it are reported as over-packed")
     drag_treatment: str = spec("semi-implicit", kind="str", choices=("semi-implicit", "explicit"),
                                doc="'semi-implicit': implicit in the gas (through beta) and in each DEM kick, "
@@ -252,8 +253,8 @@ class SuspensionConfig:
                                             doc="Ga_e = g d_e^3 / nu^2 on the volume-equivalent diameter "
                                                 "d_e = (3 l d^2 / 2)^(1/3)")
     solids_fraction: float = spec(0.2, gt=0.0, le=0.55, doc="mean solids volume fraction <phi>")
-    box: tuple = spec((9.0, 9.0, 18.0), kind="vec3", doc="box size in diameters d (seed 004: 9 x 9 x 18)")
-    cells: tuple = spec((3, 3, 6), kind="int3", ge=1, doc="liquid grid cells along x, y, z")
+    box: tuple = spec((9.0, 9.0, 18.0), kind="vec3", gt=0.0, doc="box size in diameters d (seed 004: 9 x 9 x 18)")
+    cells: tuple = spec((3, 3, 6), kind="int3", ge=1, le=10000, doc="liquid grid cells along x, y, z")
     diameter: float = spec(1.0e-3, unit="length", gt=0.0, doc="particle diameter d [m]: sets the dimensional scale")
     liquid_density: float = spec(1000.0, unit="density", gt=0.0, doc="liquid density rho [kg/m^3]")
     duration: float = spec(20.0, gt=0.0, doc="simulated time in viscous times d^2 / nu")
@@ -264,7 +265,7 @@ class SuspensionConfig:
 
 @dataclass(frozen=True)
 class RunConfig:
-    threads: int = spec(0, kind="int", ge=0, doc="numba threads (0: all cores)")
+    threads: int = spec(0, kind="int", ge=0, le=4096, doc="numba threads (0: all cores)")
 
 
 @dataclass(frozen=True)
@@ -313,6 +314,11 @@ def _describe_rule(meta) -> str:
     return " ".join(parts)
 
 
+# every number of a case lies within these magnitudes (or is 0): values such as 1e-320 or 1e308 overflow
+# or divide by zero in the derived checks (collision time, step ratios, volumes) instead of being refused
+MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-30, 1e30
+
+
 def _number(value, meta, path, problems):
     """A float in SI from a number or a 'value unit' string; None (and a problem) if invalid."""
     unit = meta.get("unit")
@@ -339,6 +345,10 @@ def _number(value, meta, path, problems):
         return None
     if not math.isfinite(number):
         problems.append(f"{path} = {value!r}: must be finite")
+        return None
+    if number != 0.0 and not MIN_MAGNITUDE <= abs(number) <= MAX_MAGNITUDE:
+        problems.append(f"{path} = {value!r}: magnitude outside {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g} (SI), beyond "
+                        "any physical value of it and the range fvdem's arithmetic is checked for")
         return None
     return number
 
@@ -390,6 +400,13 @@ def _convert(value, meta, path, problems):
     raise AssertionError(kind)
 
 
+def _key_path(path: str, key) -> str:
+    """``path.key``, or ``path['key']`` for a key that is not a plain name (empty, spaces, digits first)."""
+    if isinstance(key, str) and re.fullmatch(r"[A-Za-z_][A-Za-z0-9_-]*", key):
+        return f"{path}.{key}" if path else key
+    return f"{path}[{key!r}]"
+
+
 def _build(cls, table, path, problems):
     if not isinstance(table, dict):
         problems.append(f"{path or 'case'} = {table!r}: expected a table")
@@ -397,7 +414,7 @@ def _build(cls, table, path, problems):
     known = {f.name: f for f in fields(cls) if f.metadata.get("kind") != "internal"}
     for key in table:
         if key not in known:
-            where = f"{path}.{key}" if path else key
+            where = _key_path(path, key)
             close = difflib.get_close_matches(key, known, n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else ""
             problems.append(f"{where}: unknown key{hint}; allowed keys here: {', '.join(known)}")
@@ -483,14 +500,14 @@ def _coupling_checks(case: Case, problems: list) -> None:
 
 
 def _cross_checks(case: Case, problems: list) -> None:
-    _gas_checks(case, problems)
-    if case.particles.count == 0:
-        return
-    p = case.particles
     lower, upper = case.domain.lower, case.domain.upper
     if any(u <= lo for lo, u in zip(lower, upper)):
         problems.append(f"domain.upper = {list(upper)}: must exceed domain.lower = {list(lower)} on every axis")
         return
+    _gas_checks(case, problems)
+    if case.particles.count == 0:
+        return
+    p = case.particles
     if p.shape == "spherocylinder":
         if p.length is None:
             problems.append("particles.length: required for shape 'spherocylinder' (length including caps, m)")
@@ -537,7 +554,11 @@ def _cross_checks(case: Case, problems: list) -> None:
         if case.domain.periodic[d] and upper[d] - lower[d] < 3.0 * reach:
             problems.append(f"domain.periodic: the periodic box is {upper[d] - lower[d]:g} m along {axis}; it must "
                             f"be at least 3 x the neighbour reach {reach:.4g} m")
-    tc = case.collision_time()
+    try:
+        tc = case.collision_time()
+    except ValueError as exc:  # the dashpot cannot reach the restitution (e.g. e -> 0)
+        problems.append(f"contact.restitution = {case.contact.restitution:g}: {exc}")
+        return
     if case.time.dem_step > tc / 10.0:
         problems.append(f"time.dem_step = {case.time.dem_step:.3g}: DEM time step {case.time.dem_step:.3g} s exceeds "
                         f"1/10 of the collision time {tc:.3g} s (k_n = {case.contact.normal_stiffness:g} N/m, "
@@ -554,7 +575,7 @@ def _set_path(table: dict, dotted: str, value: Any) -> None:
     for key in keys[:-1]:
         node = node.setdefault(key, {})
         if not isinstance(node, dict):
-            raise CaseError([f"--set {dotted}: '{key}' is not a table"])
+            raise CaseError([f"--set {dotted!r}: '{key}' is not a table"])
     node[keys[-1]] = value
 
 
@@ -609,8 +630,18 @@ def load_case(path, overrides: dict | None = None) -> Case:
             table = tomllib.load(fh)
     except FileNotFoundError:
         raise CaseError([f"{path}: no such case file"]) from None
+    except IsADirectoryError:
+        raise CaseError([f"{path}: is a directory, not a case file"]) from None
+    except PermissionError:
+        raise CaseError([f"{path}: not readable (permission denied)"]) from None
+    except UnicodeDecodeError as exc:
+        raise CaseError([f"{path}: not a text file (not UTF-8 at byte {exc.start}); a case file is TOML text"]) from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError([f"{path}: not valid TOML: {exc}"]) from None
+    except OSError as exc:
+        raise CaseError([f"{path}: cannot be read ({exc.strerror or exc})"]) from None
+    if not table:
+        raise CaseError([f"{path}: empty case file (no tables or keys); see `fvdem schema` or cases/ for examples"])
     return case_from_dict(table, source=str(path), overrides=overrides)
 
 

@@ -24,6 +24,9 @@ def _fail(message: str, code: int = 2) -> int:
 
 def cmd_check(args) -> int:
     case = load_case(args.case, _overrides(args.set))
+    if case.particles.initial_state is not None and case.particles.count > 0:
+        from .simulation import load_initial_state
+        load_initial_state(case)  # what `fvdem run` refuses before it starts
     print(f"{args.case}: OK ({case.particles.count} {case.particles.shape}s, end {case.time.end:g} s, "
           f"DEM step {case.time.dem_step:g} s = collision time / {case.collision_time() / case.time.dem_step:.1f})")
     return 0
@@ -123,6 +126,8 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except CaseError as exc:
+        if len(exc.problems) == 1:
+            return _fail(f"invalid case: {exc.problems[0]}")
         return _fail("invalid case:\n  " + "\n  ".join(exc.problems))
     except OutputError as exc:
         return _fail(str(exc))

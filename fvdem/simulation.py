@@ -52,20 +52,33 @@ def set_threads(threads: int) -> int:
     return wanted
 
 
+def load_initial_state(case: Case) -> ParticleArrays:
+    """The particles of ``particles.initial_state``, checked against the case (count, diameter and
+    length); ``CaseError`` naming the key otherwise. ``fvdem check`` calls it too, so that it refuses
+    what ``fvdem run`` would."""
+    cfg = case.particles
+    path = case.resolve_path(cfg.initial_state)
+    if not path.is_file():
+        raise CaseError([f"particles.initial_state = {cfg.initial_state!r}: file {path} does not exist "
+                         "(run the case that writes it first: cases/bed_ar1.toml and cases/bed_ar4.toml write the paper cases' settled beds)"])
+    try:
+        with np.load(path) as data:
+            particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
+    except (OSError, ValueError, KeyError, EOFError) as exc:
+        raise CaseError([f"particles.initial_state = {cfg.initial_state!r}: {path} is not a particle state "
+                         f"written by fvdem ({type(exc).__name__}: {exc})"]) from None
+    if particles.count != cfg.count:
+        raise CaseError([f"particles.count = {cfg.count}: the initial state {path} holds {particles.count}"])
+    if not (np.allclose(particles.radius, cfg.radius) and np.allclose(particles.half_length, cfg.half_length)):
+        raise CaseError([f"particles: the shape in {path} differs from the case's diameter/length"])
+    return particles
+
+
 def build_particles(case: Case) -> ParticleArrays:
     """Particles of a case: inserted without overlap, or loaded from ``particles.initial_state``."""
     cfg = case.particles
     if cfg.initial_state is not None:
-        path = case.resolve_path(cfg.initial_state)
-        if not path.exists():
-            raise CaseError([f"particles.initial_state = {cfg.initial_state!r}: file {path} does not exist "
-                             "(run the case that writes it first, e.g. fvdem run cases/bed_ar1.toml)"])
-        with np.load(path) as data:
-            particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
-        if particles.count != cfg.count:
-            raise CaseError([f"particles.count = {cfg.count}: the initial state {path} holds {particles.count}"])
-        if not (np.allclose(particles.radius, cfg.radius) and np.allclose(particles.half_length, cfg.half_length)):
-            raise CaseError([f"particles: the shape in {path} differs from the case's diameter/length"])
+        particles = load_initial_state(case)
     elif cfg.insertion.method == "compress":
         lower, upper = np.asarray(case.domain.lower, float), np.asarray(case.domain.upper, float)
         try:
@@ -522,10 +535,8 @@ class Simulation:
     def _progress_bar(self, end_time: float):
         if not self.progress:
             return None
-        from tqdm import tqdm
-        return tqdm(total=end_time, initial=self.time, unit="s", unit_scale=False, dynamic_ncols=True,
-                    desc=f"{self.case.name} (simulated s)",
-                    bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.4f}/{total:.4f} s [{elapsed}<{remaining}{postfix}]")
+        from .io.progress import progress_bar
+        return progress_bar(end_time, self.time, f"{self.case.name} (simulated s)")
 
     def _install_signal_handlers(self):
         if self.out is None:

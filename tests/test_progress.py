@@ -1,0 +1,30 @@
+"""Progress in a log file: one plain line every few per cent, no carriage returns (issue 19)."""
+import io
+
+from fvdem.io.progress import LineProgress, progress_bar
+
+
+def test_line_progress_prints_a_line_every_five_percent_and_no_carriage_returns():
+    stream = io.StringIO()
+    bar = progress_bar(2.0, 0.0, "run", stream=stream)  # not a terminal
+    assert isinstance(bar, LineProgress)
+    for _ in range(400):  # 400 updates of 0.005 s
+        bar.update(0.005)
+        bar.set_postfix_str("90 steps/s")
+    bar.close()
+    text = stream.getvalue()
+    lines = text.splitlines()
+    assert "\r" not in text
+    assert len(lines) == 20  # 5 %, 10 %, ..., 100 %
+    assert lines[0].startswith("run:   5% 0.1000/2.0000 s, 90 steps/s, elapsed")
+    assert lines[-1].startswith("run: 100% 2.0000/2.0000 s") and "left 0:00:00" in lines[-1]
+
+
+def test_a_stopped_run_ends_its_log_with_where_it_stopped():
+    stream = io.StringIO()
+    bar = LineProgress(1.0, 0.25, "run", stream=stream)  # resumed at 25 %
+    bar.update(0.28)  # one step across several 5 % marks: one line
+    bar.update(0.01)  # stopped at 54 %: close() writes where
+    bar.close()
+    lines = stream.getvalue().splitlines()
+    assert [line.split()[1] for line in lines] == ["53%", "54%"]
