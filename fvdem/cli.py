@@ -133,6 +133,8 @@ def main(argv=None) -> int:
         return _fail(str(exc))
     except SimulationError as exc:
         return _fail(f"simulation stopped: {exc}", 3)
+    except OSError as exc:  # a file the command reads or writes outside the case and run folders
+        return _fail(f"{exc.filename or ''}: {exc.strerror or exc}")
 
 
 if __name__ == "__main__":

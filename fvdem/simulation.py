@@ -11,6 +11,7 @@ import json
 import os
 import shutil
 import signal
+import warnings
 import time as _time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -119,6 +120,57 @@ def build_dem(case: Case, particles: ParticleArrays) -> DEMSystem:
 def prepare_output(out_dir, overwrite: bool = False, resume: bool = False) -> Path:
     """Create the output folder; never replace results unless ``overwrite``."""
     out = Path(out_dir)
+    try:
+        return _prepare_output(out, overwrite, resume)
+    except OSError as exc:
+        raise OutputError(f"output folder {out}: {exc.strerror or exc}"
+                          + (f" ({exc.filename})" if exc.filename and str(exc.filename) != str(out) else "")) from None
+
+
+# a step costing this many times the run's first measured rate is warned about (once)
+RUNAWAY_COST = 20.0
+# a walled column's gas faster than this many times the speed its inlet (in the densest packing) or
+# its particles drive is stopped: the 10x-continuity defect of issue 14 reached 20-50x
+RUNAWAY_GAS_SPEED = 10.0
+
+# keys a resumed run may change: when it ends, what it writes and how it runs; all else is its physics
+RESUME_SAFE = ("name", "description", "time.end", "time.stop_when_settled", "time.settled_speed", "time.min_time",
+               "output.", "run.")
+
+
+def check_resumable(case: Case, out: Path) -> None:
+    """Refuse to resume ``out`` with a case whose physics differs from the one it was started with
+    (its ``case.toml``), naming every key that differs; end time, output and run settings may change."""
+    import tomllib
+    path = out / "case.toml"
+    if not path.exists():
+        return
+    try:
+        before = _flatten(tomllib.loads(path.read_text()))
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise OutputError(f"--resume: {path} cannot be read ({exc}); it records the case the run was started with")
+    now = _flatten(tomllib.loads(to_toml(case)))
+    changed = [key for key in sorted(set(before) | set(now))
+               if before.get(key) != now.get(key) and not any(
+                   key == safe or (safe.endswith(".") and key.startswith(safe)) for safe in RESUME_SAFE)]
+    if changed:
+        listed = "; ".join(f"{k}: {before.get(k, '(unset)')!r} -> {now.get(k, '(unset)')!r}" for k in changed)
+        raise OutputError(f"--resume: the case differs from the one {out} was started with in {listed}. A resumed run "
+                          "continues the same physics; change only time.end, output.* or run.*, or start a new "
+                          "run folder")
+
+
+def _flatten(table, prefix=""):
+    flat = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            flat.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def _prepare_output(out: Path, overwrite: bool, resume: bool) -> Path:
     if resume:
         if not (out / CHECKPOINT).exists():
             raise OutputError(f"--resume: {out} holds no {CHECKPOINT} to resume from")
@@ -175,6 +227,8 @@ class Simulation:
         self.threads = set_threads(case.run.threads if threads is None else threads)
         self.progress = case.output.progress if progress is None else progress
         self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
+        if resume and self.out is not None:
+            check_resumable(case, self.out)
         self.writers = _WriterState()
         # the loop counts DEM steps in a particle-only or uncoupled case, CFD steps (coupling
         # intervals) when the gas is on and coupled, or without particles
@@ -199,6 +253,7 @@ class Simulation:
         self._snapshot_schedule = _Schedule(max(1, round(case.output.snapshot_interval / dt)))
         self._checkpoint_schedule = _Schedule(max(1, round(case.output.checkpoint_interval / dt)))
         self._stop_requested = False
+        self._cost_reference, self._cost_warned, self._cost_chunks = None, False, 0
         if resume:
             arrays, meta = load_checkpoint(self.out / CHECKPOINT)
             self.dem = None
@@ -207,10 +262,10 @@ class Simulation:
                                                       if k.startswith("particles.")})
                 self.dem = build_dem(case, particles)
                 self.dem.restore(arrays)
-            if self.gas is not None:
-                self.gas.restore(arrays)
-            if self.coupled:
+            if self.coupled:  # before the gas restore: the bridge maps a start-up voidage
                 self.bridge = CouplingBridge(case, self.dem, self.gas)
+            if self.gas is not None:  # the voidage of the last step, not one mapped from the final positions
+                self.gas.restore(arrays)
             self.writers = _WriterState(**meta["writers"])
             self._timeseries().start(resume_time=self.time)
         else:
@@ -333,8 +388,10 @@ class Simulation:
             while self.step_count < end_step and not self._stop_requested and not self.writers.settled:
                 step = self.step_count
                 target = min(end_step, self._next_event(step), step + 500)
+                chunk_start = _time.perf_counter()
                 self._advance(target - step)
-                self._on_events(self.step_count)
+                self._watch_cost(target - step, _time.perf_counter() - chunk_start)
+                self._write_guarded(self._on_events, self.step_count)
                 if bar is not None:
                     bar.update(self.time - bar.n)
                     elapsed = _time.perf_counter() - wall0
@@ -350,9 +407,62 @@ class Simulation:
         steps = self.step_count - start_step
         summary = self.summary(steps, _time.perf_counter() - wall0)
         if self.out is not None:
-            self._write_checkpoint()
-            self._write_final(summary)
+            self._write_guarded(self._write_checkpoint)
+            self._write_guarded(self._write_final, summary)
         return summary
+
+    def _watch_cost(self, steps: int, seconds: float) -> None:
+        """Warn once when the wall time per step grows past ``RUNAWAY_COST`` times the run's first
+        measured rate (a bed gone violent: fast particles rebuild the neighbour list every step, large
+        overlaps, a gas step struggling), with the numbers that tell which."""
+        if steps <= 0 or seconds <= 0:
+            return
+        rate = seconds / steps
+        rebuilds = self.dem.rebuild_count if self.dem is not None else 0
+        if self._cost_reference is None:
+            self._cost_chunks += 1
+            if self._cost_chunks > 1:  # not the first chunk: that one holds numba's compilation
+                self._cost_reference = (rate, rebuilds, self.step_count)
+            return
+        if self._cost_warned or rate < RUNAWAY_COST * self._cost_reference[0]:
+            return
+        self._cost_warned = True
+        ref_rate, ref_rebuilds, ref_step = self._cost_reference
+        diag = self.diagnostics()
+        gas = (f"; gas: largest speed {diag['gas_max_speed']:.3g} m/s, Courant number {self.gas.courant_number():.3g}"
+               if self.gas is not None else "")
+        particles = (f"; particles: largest speed {diag['max_speed']:.3g} m/s, largest overlap "
+                     f"{diag['max_overlap_over_diameter']:.3g} d, {rebuilds - ref_rebuilds} neighbour-list rebuilds "
+                     f"in {self.step_count - ref_step} steps" if self.dem is not None else "")
+        warnings.warn(f"t = {self.time:.4g} s: a step costs {rate / ref_rate:.0f} x what it cost at the start "
+                      f"({rate * 1e3:.3g} ms against {ref_rate * 1e3:.3g} ms){particles}{gas}. If the bed has gone "
+                      "violent, reduce time.dem_step and gas.cfd_step (docs/speed-accuracy.md)",
+                      RuntimeWarning, stacklevel=3)
+
+    def _check_gas_runaway(self, diag: dict) -> None:
+        """Stop a walled column whose gas runs far faster than anything drives it: the inlet's
+        interstitial speed in the densest packing (U / 0.3) and the fastest particle."""
+        if self.gas is None or self.gas.solver.periodic or self.gas.config.inlet_velocity <= 0:
+            return
+        drive = max(self.gas.config.inlet_velocity / 0.3, diag.get("max_speed", 0.0))
+        if diag["gas_max_speed"] > RUNAWAY_GAS_SPEED * drive:
+            raise SimulationError(
+                f"the gas runs away at t = {self.time:.6g} s: largest cell speed {diag['gas_max_speed']:.3g} m/s, "
+                f"{diag['gas_max_speed'] / drive:.0f} x the fastest speed the inlet or the particles drive ({drive:.3g} m/s); "
+                f"largest Courant number {self.gas.courant_number():.3g} at gas.cfd_step = {self.gas.dt:g} s: reduce "
+                "gas.cfd_step (docs/speed-accuracy.md)")
+
+    def _write_guarded(self, write, *args) -> None:
+        """Run a writer; a full disk or an unwritable folder stops the run with ``OutputError`` (the
+        checkpoint is replaced atomically, so the last complete one stays intact)."""
+        try:
+            write(*args)
+        except OSError as exc:
+            where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+            raise OutputError(
+                f"writing the output failed at t = {self.time:.6g} s{where}: {exc.strerror or exc}; the last "
+                f"complete checkpoint in {self.out} is intact: free space or fix the folder's permissions, then "
+                "continue with --resume") from None
 
     def _next_event(self, step: int) -> int:
         if self.out is None:
@@ -371,6 +481,8 @@ class Simulation:
             if self.gas is not None:
                 self.gas.check_health(self.time)
             diag = self.diagnostics()
+            if "gas_max_speed" in diag:
+                self._check_gas_runaway(diag)
             if "pressure_drop_over_weight" in diag and step > 0:
                 self.writers.pressure_history.append((self.time, diag["bed_pressure_drop"]))
             if "mixing_entropy" in diag and (not self.writers.mixing_history

@@ -74,3 +74,39 @@ def test_runtime_warns_once_when_a_cell_courant_number_exceeds_one():
         fvdem.Simulation(case).run(20 * 4.5e-3)
     messages = [str(w.message) for w in caught if "Courant" in str(w.message)]
     assert len(messages) == 1 and "exceeds 1" in messages[0]
+
+
+def test_gas_running_away_stops_the_run_with_the_cause_and_the_setting():
+    """A walled column whose gas runs at 10 x what its inlet (in the densest packing) or its particles
+    drive is stopped (issue 19: the slow speed-accuracy point ran for hours with 26 m/s gas in a
+    3.4 m/s inlet)."""
+    import pytest
+    import fvdem
+    from fvdem.case import case_from_dict
+    case = case_from_dict({"particles": {"count": 0}, "domain": {"upper": [0.06, 0.06, 0.45]},
+                           "output": {"progress": False}, "gas": {"enabled": True, "cells": [4, 4, 30],
+                                                                  "inlet_velocity": 1.0}})
+    sim = fvdem.Simulation(case)
+    sim.run(0.01)
+    sim.gas.solver.velocity[5, 2] = 40.0  # 12 x U / 0.3
+    with pytest.raises(fvdem.SimulationError, match="gas runs away.*gas.cfd_step"):
+        sim._on_events(sim._timeseries_schedule.next_after(sim.step_count))
+
+
+def test_a_step_grown_far_costlier_than_at_the_start_is_warned_once():
+    import pytest
+    import fvdem
+    from fvdem.case import case_from_dict
+    case = case_from_dict({"particles": {"count": 20, "diameter": "5 mm"}, "domain": {"upper": [0.05, 0.05, 0.1]},
+                           "output": {"progress": False}, "time": {"end": 1.0}})
+    sim = fvdem.Simulation(case)
+    sim.run(0.002)
+    sim._cost_reference, sim._cost_chunks = None, 1  # measure the reference again from the next chunk
+    sim._watch_cost(100, 0.1)  # the reference: 1 ms per step
+    sim._watch_cost(100, 0.5)  # 5 x: nothing
+    with pytest.warns(RuntimeWarning, match="costs 30 x what it cost at the start.*reduce time.dem_step"):
+        sim._watch_cost(100, 3.0)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim._watch_cost(100, 3.0)  # once only
