@@ -161,6 +161,7 @@ def main(argv=None):
         return
     if args.quick:
         args.particles, args.hold, args.start = 500, 0.06, 0.15
+    Path(args.out).mkdir(parents=True, exist_ok=True)  # before the ramp: its chart must not fail after it
     wall0, cpu0 = time.perf_counter(), time.process_time()
     shape = args.shape
     umf_exp = EXPERIMENT[shape]
