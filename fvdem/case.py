@@ -19,6 +19,7 @@ from dataclasses import MISSING, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
+from .coupling.closures import describe_laws, law, law_names
 from .dem.contact_law import collision_time
 from .dem.particles import spherocylinder_volume, volume_equivalent_diameter
 
@@ -208,17 +209,12 @@ class GasConfig:
 @dataclass(frozen=True)
 class CouplingConfig:
     enabled: bool = spec(True, kind="bool", doc="exchange momentum between gas and particles (when both are present)")
-    drag: str = spec("hoelzer-sommerfeld", kind="str",
-                     choices=("hoelzer-sommerfeld", "sanjeevi-padding", "gidaspow", "none"),
-                     doc="drag closure: Hoelzer-Sommerfeld with Di Felice's voidage function (single-particle, "
-                         "any shape), Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders), or Gidaspow "
-                         "(Ergun below voidage 0.8 with the sphericity, Wen-Yu above; not a seed 000 closure: it "
-                         "reproduces Ergun's packed-bed pressure drop, docs/validation.md)")
-    lift: str = spec("none", kind="str", choices=("none", "zastawny", "sanjeevi-padding"),
-                     doc="lift closure (spherocylinders only): Zastawny form with seed 000's Table 3, or "
-                         "Sanjeevi-Padding 2020")
-    torque: str = spec("none", kind="str", choices=("none", "zastawny", "sanjeevi-padding"),
-                       doc="hydrodynamic torque closure (spherocylinders only), as for lift")
+    drag: str = spec("hoelzer-sommerfeld", kind="str", choices=law_names("drag"),
+                     doc="drag closure (registered in fvdem.coupling.closures): " + describe_laws("drag"))
+    lift: str = spec("none", kind="str", choices=law_names("lift"),
+                     doc="lift closure (spherocylinders only): " + describe_laws("lift"))
+    torque: str = spec("none", kind="str", choices=law_names("torque"),
+                       doc="hydrodynamic torque closure (spherocylinders only): " + describe_laws("torque"))
     pressure_gradient_force: bool = spec(True, kind="bool", doc="apply -V_p grad p to the particles")
     voidage: str = spec("divided", kind="str", choices=("divided", "centroid", "trilinear"),
                         doc="voidage mapping: 'divided' (satellite points along the axis, each to its cell), "
@@ -481,22 +477,24 @@ def _gas_checks(case: Case, problems: list) -> None:
 
 
 def _coupling_checks(case: Case, problems: list) -> None:
+    """Each chosen law fits the particles: its shapes and the aspect ratio it was fitted for (registry)."""
     c, p = case.coupling, case.particles
-    for key in ("lift", "torque"):
-        if getattr(c, key) != "none" and p.shape == "sphere":
-            problems.append(f"coupling.{key} = {getattr(c, key)!r}: a sphere has no orientation-dependent "
-                            f"{key}; use coupling.{key} = 'none'")
-    if p.shape == "sphere" or p.length is None:
-        if c.drag == "sanjeevi-padding":
-            problems.append("coupling.drag = 'sanjeevi-padding': fitted for aspect-ratio-4 spherocylinders; "
-                            "spheres use 'hoelzer-sommerfeld'")
-        return
-    aspect = p.length / p.diameter
-    for key in ("drag", "lift", "torque"):
-        name = getattr(c, key)
-        if name in ("sanjeevi-padding", "zastawny") and abs(aspect - 4.0) > 0.2:
-            problems.append(f"coupling.{key} = {name!r}: its coefficients are fitted for aspect ratio 4; the "
-                            f"particles have {aspect:.3g} (use 'hoelzer-sommerfeld' drag and no lift/torque)")
+    shape = "sphere" if p.shape == "sphere" or p.length is None else "spherocylinder"
+    aspect = 1.0 if shape == "sphere" else p.length / p.diameter
+    for kind in ("drag", "lift", "torque"):
+        chosen = law(kind, getattr(c, kind))
+        if shape not in chosen.shapes:
+            if kind == "drag":
+                fitted = (f"aspect-ratio-{chosen.aspect_ratio:g} " if chosen.aspect_ratio is not None else "")
+                problems.append(f"coupling.drag = {chosen.name!r}: fitted for {fitted}"
+                                f"{' and '.join(chosen.shapes)}s; spheres use 'hoelzer-sommerfeld'")
+            else:
+                problems.append(f"coupling.{kind} = {chosen.name!r}: a sphere has no orientation-dependent "
+                                f"{kind}; use coupling.{kind} = 'none'")
+        elif chosen.aspect_ratio is not None and abs(aspect - chosen.aspect_ratio) > 0.05 * chosen.aspect_ratio:
+            problems.append(f"coupling.{kind} = {chosen.name!r}: its coefficients are fitted for aspect ratio "
+                            f"{chosen.aspect_ratio:g}; the particles have {aspect:.3g} (use 'hoelzer-sommerfeld' "
+                            "drag and no lift/torque)")
 
 
 def _cross_checks(case: Case, problems: list) -> None:

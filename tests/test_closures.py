@@ -187,3 +187,29 @@ def test_paper_closures_resist_a_packed_bed_less_than_ergun():
     c = HydrodynamicModel("hoelzer-sommerfeld", "none", "none", D, D, RHO, MU).drag_coefficient(
         np.array([[0.0, 0.0, u]]), np.array([eps]), axis)[0]
     assert c * u == pytest.approx(eps * np.pi / 6 * D ** 3 * (1442.0 - RHO) * 9.81, rel=1e-7)
+
+
+# --------------------------------------------------------------------------- registry
+def test_registry_is_what_the_case_checks_and_the_schema_offer():
+    """Drag, lift and torque laws come from one registry: the case's allowed names and `fvdem schema`
+    list exactly the registered ones, and each law evaluates for the shapes it is registered for."""
+    from fvdem.case import CouplingConfig, schema_reference
+    from fvdem.coupling import closures as c
+    from dataclasses import fields
+    choices = {f.name: f.metadata["choices"] for f in fields(CouplingConfig) if f.name in ("drag", "lift", "torque")}
+    schema = schema_reference()
+    rng = np.random.default_rng(1)
+    slip = rng.normal(0.0, 1.0, (6, 3))
+    axis = rng.normal(0.0, 1.0, (6, 3))
+    axis /= np.linalg.norm(axis, axis=1)[:, None]
+    for kind in ("drag", "lift", "torque"):
+        assert choices[kind] == c.law_names(kind)
+        for name, law in c.LAWS[kind].items():
+            assert f"'{name}'" in schema and law.summary
+            for shape in law.shapes:
+                particle = c.ParticleShape(D, D if shape == "sphere" else 4 * D, RHO, MU)
+                value = law.function(particle, slip, np.full(6, 0.5), axis)
+                if name == "none":
+                    assert value is None or not np.any(value)
+                else:
+                    assert np.all(np.isfinite(value)) and np.shape(value)[0] == 6

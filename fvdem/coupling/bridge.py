@@ -45,7 +45,8 @@ from .voidage import voidage as map_voidage
 
 @dataclass(frozen=True)
 class HydrodynamicModel:
-    """Closures chosen by name (``coupling`` case section) for particles of one shape.
+    """Closures chosen by name (``coupling`` case section) for particles of one shape, looked up in
+    the registry ``closures.LAWS``.
 
     ``diameter`` the sphere or cylinder diameter [m]; ``length`` the total length [m] (= diameter for
     spheres); ``density``/``viscosity`` of the gas [kg/m^3], [Pa s].
@@ -60,46 +61,28 @@ class HydrodynamicModel:
     viscosity: float
 
     @property
+    def particle(self) -> closures.ParticleShape:
+        return closures.ParticleShape(self.diameter, self.length, self.density, self.viscosity)
+
+    @property
     def equivalent_diameter(self) -> float:
-        return float(closures.spherocylinder_shape(self.diameter, self.length)[0])
+        return self.particle.equivalent_diameter
 
     @property
     def is_sphere(self) -> bool:
-        return self.length <= self.diameter
+        return self.particle.is_sphere
 
     def drag_coefficient(self, slip, voidage, axis):
         """``c`` [kg/s] (N,) with ``F_D = c * slip``."""
-        d_p, rho, mu = self.equivalent_diameter, self.density, self.viscosity
-        if self.drag == "none":
-            return np.zeros(len(slip))
-        if self.drag == "sanjeevi-padding":
-            return closures.multi_particle_drag_coefficient(slip, voidage, axis, d_p, rho, mu)
-        if self.drag == "gidaspow":
-            sphericity = 1.0 if self.is_sphere else float(closures.sphericities(self.diameter, self.length, 0.0)[0])
-            return closures.gidaspow_drag_coefficient(slip, voidage, d_p, rho, mu, sphericity)
-        if self.is_sphere:
-            return closures.single_particle_drag_coefficient(slip, voidage, d_p, rho, mu)
-        theta = closures.incidence_angle(axis, slip)
-        phi, crosswise, lengthwise = closures.sphericities(self.diameter, self.length, theta)
-        return closures.single_particle_drag_coefficient(slip, voidage, d_p, rho, mu, phi, crosswise, lengthwise)
+        return closures.law("drag", self.drag).function(self.particle, slip, voidage, axis)
 
     def lift_force(self, slip, voidage, axis):
         """Lift [N] (N, 3), or None when the model has none."""
-        args = (slip, voidage, axis, self.equivalent_diameter, self.density, self.viscosity)
-        if self.lift == "zastawny":
-            return closures.single_particle_lift(*args)
-        if self.lift == "sanjeevi-padding":
-            return closures.multi_particle_lift(*args)
-        return None
+        return closures.law("lift", self.lift).function(self.particle, slip, voidage, axis)
 
     def hydrodynamic_torque(self, slip, voidage, axis):
         """Hydrodynamic torque [N m] (N, 3), or None when the model has none."""
-        args = (slip, voidage, axis, self.equivalent_diameter, self.density, self.viscosity)
-        if self.torque == "zastawny":
-            return closures.single_particle_torque(*args)
-        if self.torque == "sanjeevi-padding":
-            return closures.multi_particle_torque(*args)
-        return None
+        return closures.law("torque", self.torque).function(self.particle, slip, voidage, axis)
 
 
 def rotational_drag_torque(angular_velocity, inertia, coefficient, dt):

@@ -269,3 +269,125 @@ def multi_particle_torque(slip, voidage, axis, d_p, rho, mu):
     phi = incidence_angle(axis, slip)
     magnitude = 2 * np.pi * mu * d_p ** 2 * voidage * speed * t_mag * np.sin(phi) * np.cos(phi)
     return magnitude[:, None] * torque_direction(axis, slip)
+
+
+# --------------------------------------------------------------------------- registry
+# A law is one function ``law(particle, slip, voidage, axis)`` of a ``ParticleShape`` and per-particle
+# arrays, returning the drag coefficient c [kg/s] (N,) with F_D = c * slip, or a lift force [N] /
+# hydrodynamic torque [N m] (N, 3); plus one registration with its name, the shapes it is for, the
+# aspect ratio its coefficients were fitted for (None: any), its validity and its reference. The case
+# checks, ``fvdem schema`` and the bridge read ``LAWS``; adding a law touches this module and its test.
+from dataclasses import dataclass  # noqa: E402
+
+
+@dataclass(frozen=True)
+class ParticleShape:
+    """What a law needs of the particles and the fluid: cylinder ``diameter`` and total ``length`` [m]
+    (length = diameter for spheres), fluid ``density`` [kg/m^3] and ``viscosity`` [Pa s]."""
+
+    diameter: float
+    length: float
+    density: float
+    viscosity: float
+
+    @property
+    def equivalent_diameter(self) -> float:
+        return float(spherocylinder_shape(self.diameter, self.length)[0])
+
+    @property
+    def is_sphere(self) -> bool:
+        return self.length <= self.diameter
+
+
+@dataclass(frozen=True)
+class Law:
+    kind: str  # "drag", "lift" or "torque"
+    name: str
+    function: object
+    shapes: tuple  # particle shapes it applies to
+    aspect_ratio: float | None  # the aspect ratio its coefficients were fitted for (None: any)
+    validity: str
+    reference: str
+    summary: str
+
+
+LAWS: dict[str, dict[str, Law]] = {"drag": {}, "lift": {}, "torque": {}}
+
+
+def register(kind, name, *, shapes=("sphere", "spherocylinder"), aspect_ratio=None, validity="", reference="",
+             summary=""):
+    """Decorator: register ``function`` as the ``kind`` law ``name``."""
+    def decorate(function):
+        LAWS[kind][name] = Law(kind, name, function, tuple(shapes), aspect_ratio, validity, reference, summary)
+        return function
+    return decorate
+
+
+def law(kind: str, name: str) -> Law:
+    try:
+        return LAWS[kind][name]
+    except KeyError:
+        raise ValueError(f"no {kind} law {name!r}; registered: {', '.join(LAWS[kind])}") from None
+
+
+def law_names(kind: str) -> tuple:
+    return tuple(LAWS[kind])
+
+
+def describe_laws(kind: str) -> str:
+    """One line per registered law, for the case reference and ``fvdem schema``."""
+    return "; ".join(f"'{n}': {l.summary}" for n, l in LAWS[kind].items())
+
+
+@register("drag", "hoelzer-sommerfeld", validity="any Re; the voidage function is Di Felice's (eps 0.4-1)",
+          reference="Hoelzer & Sommerfeld (2008), Powder Technol. 184; Di Felice (1994), Int. J. Multiph. Flow 20",
+          summary="Hoelzer-Sommerfeld with Di Felice's voidage function (single-particle, any shape)")
+def _hoelzer_sommerfeld(particle, slip, voidage, axis):
+    args = (slip, voidage, particle.equivalent_diameter, particle.density, particle.viscosity)
+    if particle.is_sphere:
+        return single_particle_drag_coefficient(*args)
+    phi, crosswise, lengthwise = sphericities(particle.diameter, particle.length, incidence_angle(axis, slip))
+    return single_particle_drag_coefficient(*args, phi, crosswise, lengthwise)
+
+
+@register("drag", "sanjeevi-padding", shapes=("spherocylinder",), aspect_ratio=4.0,
+          validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",
+          reference="Sanjeevi & Padding (2020), AIChE J. 66; seed 000 Table 2",
+          summary="Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders)")
+def _sanjeevi_padding_drag(particle, slip, voidage, axis):
+    return multi_particle_drag_coefficient(slip, voidage, axis, particle.equivalent_diameter, particle.density,
+                                           particle.viscosity)
+
+
+@register("drag", "gidaspow", validity="Ergun below voidage 0.8, Wen-Yu above (Re < 1000 in the Schiller-Naumann term)",
+          reference="Gidaspow (1994), Multiphase Flow and Fluidization; Ergun (1952); Wen & Yu (1966)",
+          summary="Gidaspow (Ergun below voidage 0.8 with the sphericity, Wen-Yu above; not a seed 000 closure: "
+                  "it reproduces Ergun's packed-bed pressure drop, docs/validation.md)")
+def _gidaspow(particle, slip, voidage, axis):
+    sphericity = 1.0 if particle.is_sphere else float(sphericities(particle.diameter, particle.length, 0.0)[0])
+    return gidaspow_drag_coefficient(slip, voidage, particle.equivalent_diameter, particle.density,
+                                     particle.viscosity, sphericity)
+
+
+@register("drag", "none", summary="no drag")
+def _no_drag(particle, slip, voidage, axis):
+    return np.zeros(len(slip))
+
+
+def _oriented(function):
+    def evaluate(particle, slip, voidage, axis):
+        return function(slip, voidage, axis, particle.equivalent_diameter, particle.density, particle.viscosity)
+    return evaluate
+
+
+for _kind, _single, _multi in (("lift", single_particle_lift, multi_particle_lift),
+                               ("torque", single_particle_torque, multi_particle_torque)):
+    register(_kind, "none", summary=f"no {_kind}")(lambda particle, slip, voidage, axis: None)
+    register(_kind, "zastawny", shapes=("spherocylinder",), aspect_ratio=4.0,
+             validity="isolated particle, Re 0.1-1000 (seed 000 Table 3, aspect ratio 4)",
+             reference="Zastawny et al. (2012), Int. J. Multiph. Flow 39; seed 000 Table 3",
+             summary="Zastawny form with seed 000's Table 3 (single-particle, AR-4)")(_oriented(_single))
+    register(_kind, "sanjeevi-padding", shapes=("spherocylinder",), aspect_ratio=4.0,
+             validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",
+             reference="Sanjeevi & Padding (2020), AIChE J. 66",
+             summary="Sanjeevi-Padding 2020 (multi-particle, AR-4)")(_oriented(_multi))
