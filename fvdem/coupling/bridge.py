@@ -33,6 +33,7 @@ Torque is not fed back to the gas (MODEL.md §2). A sphere case evaluates no lif
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -60,17 +61,9 @@ class HydrodynamicModel:
     density: float
     viscosity: float
 
-    @property
+    @cached_property
     def particle(self) -> closures.ParticleShape:
         return closures.ParticleShape(self.diameter, self.length, self.density, self.viscosity)
-
-    @property
-    def equivalent_diameter(self) -> float:
-        return self.particle.equivalent_diameter
-
-    @property
-    def is_sphere(self) -> bool:
-        return self.particle.is_sphere
 
     def drag_coefficient(self, slip, voidage, axis):
         """``c`` [kg/s] (N,) with ``F_D = c * slip``."""

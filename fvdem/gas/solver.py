@@ -105,6 +105,7 @@ class GasSolver:
         # face pressures, so the discrete momentum balance closes and the mixture momentum of a
         # periodic box is conserved to round-off
         self.gradient_correction = np.zeros((n, 3))
+        self._face_gradient = None  # Gauss gradient of face_pressure, from the last correction
         self.voidage = np.ones(n)
         self.voidage_old = np.ones(n)
         self.beta = np.zeros(n)
@@ -241,7 +242,7 @@ class GasSolver:
         out[self._interior] = w * cell_values[self._p] + (1.0 - w) * cell_values[self._q]
         return out
 
-    def _face_pressure(self, pressure, c_normal, k_cell, k_face, weight):
+    def _face_pressure(self, pressure, c_normal, k_cell):
         """Face pressures (F,) [Pa] consistent with the fluxes: on each interior face the value both
         half cells reach at their own gradient, ``p_f = (k_P p_P + k_N p_N + (d / 2)(c_P - c_N) . n)
         / (k_P + k_N)``; on the inlet and the walls ``p_P + d_b (c_P . n - phi / A) / k_P`` (``phi``
@@ -372,8 +373,7 @@ class GasSolver:
         c_first = np.einsum("fi,fi->f", c[self._boundary_cell], normals)
         c_second = np.zeros(mesh.face_count)
         c_second[self._interior] = np.einsum("fi,fi->f", c[self._q], normals[self._interior])
-        c_face = c_first.copy()
-        c_face[self._interior] = weight * c_first[self._interior] + (1.0 - weight) * c_second[self._interior]
+        c_face = np.einsum("fi,fi->f", self._face_interpolate(c, weight), normals)
         # time-step-independent Rhie-Chow (Choi 1999; OpenFOAM's ddtCorr): on faces, the old-velocity
         # part of u_hat, (rho / dt) D eps_old u_old, is taken from the old face flux
         old_face, old_cell = old
@@ -399,16 +399,19 @@ class GasSolver:
         self.face_flux = flux + flux_corr
         c_normal = (c_first, c_second)
         corrected = self.pressure + p_corr
-        face_p = self._face_pressure(corrected, c_normal, k_cell, k_face, weight)
-        self.velocity = u_hat - d_cell[:, None] * self._gauss_gradient(face_p)
+        face_p = self._face_pressure(corrected, c_normal, k_cell)
+        gradient = self._gauss_gradient(face_p)
+        self.velocity = u_hat - d_cell[:, None] * gradient
         if relax < 1.0:  # SIMPLE: the pressure of the next outer iteration is under-relaxed
             corrected = self.pressure + relax * p_corr
-            face_p = self._face_pressure(corrected, c_normal, k_cell, k_face, weight)
-        if self.periodic:
+            face_p = self._face_pressure(corrected, c_normal, k_cell)
+            gradient = self._gauss_gradient(face_p)
+        if self.periodic:  # a uniform shift leaves the gradient unchanged
             shift = corrected.mean()
             corrected, face_p = corrected - shift, face_p - shift
         self.pressure, self.face_pressure = corrected, face_p
-        target = self._gauss_gradient(face_p) - self._gauss_gradient(self._linear_face_pressure(corrected))
+        self._face_gradient = gradient  # the next PISO corrector's gradient
+        target = gradient - self._gauss_gradient(self._linear_face_pressure(corrected))
         self.gradient_correction += GRADIENT_RELAXATION * (target - self.gradient_correction)
         return np.abs(imbalance).max() / max(np.abs(self.face_flux).max(), 1e-30)
 
@@ -447,7 +450,7 @@ class GasSolver:
             residuals = []
             for _ in range(self.correctors):
                 residuals.append(self._correct_pressure(dt, a_p, grad_p, 1.0, old))
-                grad_p = self._gauss_gradient(self.face_pressure)
+                grad_p = self._face_gradient
             self.iterations = 1
             return {"iterations": 1, "continuity_residual": residuals[-1], "first_residual": residuals[0],
                     "direct_fallbacks": self.direct_fallbacks, "factorizations": self.factorizations}
