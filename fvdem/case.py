@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from .coupling.closures import describe_laws, law, law_names
+from .coupling.voidage import describe_voidage, voidage_names
 from .dem.contact_law import collision_time
 from .dem.particles import spherocylinder_volume, volume_equivalent_diameter
 
@@ -43,9 +44,11 @@ class CaseError(ValueError):
 
 
 def spec(default=MISSING, *, kind="float", unit=None, gt=None, ge=None, lt=None, le=None, choices=None,
-         optional=False, doc=""):
-    """A dataclass field with its validation rule in the metadata."""
-    meta = dict(kind=kind, unit=unit, gt=gt, ge=ge, lt=lt, le=le, choices=choices, optional=optional, doc=doc)
+         registry=None, optional=False, doc=""):
+    """A dataclass field with its validation rule in the metadata. ``registry``: the allowed names are
+    those registered in ``REGISTRIES[registry]`` when the case is checked (not a fixed list)."""
+    meta = dict(kind=kind, unit=unit, gt=gt, ge=ge, lt=lt, le=le, choices=choices, registry=registry,
+                optional=optional, doc=doc)
     if isinstance(default, (list, dict)):
         return field(default_factory=lambda: default, metadata=meta)
     return field(default=default, metadata=meta)
@@ -53,6 +56,21 @@ def spec(default=MISSING, *, kind="float", unit=None, gt=None, ge=None, lt=None,
 
 def section(cls, doc=""):
     return field(default_factory=cls, metadata=dict(kind="section", doc=doc))
+
+
+# registries whose names case keys take: (names, one line per name, the module that registers them)
+REGISTRIES = {
+    "drag": (lambda: law_names("drag"), lambda: describe_laws("drag"), "fvdem.coupling.closures"),
+    "lift": (lambda: law_names("lift"), lambda: describe_laws("lift"), "fvdem.coupling.closures"),
+    "torque": (lambda: law_names("torque"), lambda: describe_laws("torque"), "fvdem.coupling.closures"),
+    "voidage": (voidage_names, describe_voidage, "fvdem.coupling.voidage"),
+}
+
+
+def _choices(meta):
+    if meta.get("registry"):
+        return REGISTRIES[meta["registry"]][0]()
+    return meta.get("choices")
 
 
 # --------------------------------------------------------------------------- schema
@@ -209,17 +227,11 @@ class GasConfig:
 @dataclass(frozen=True)
 class CouplingConfig:
     enabled: bool = spec(True, kind="bool", doc="exchange momentum between gas and particles (when both are present)")
-    drag: str = spec("hoelzer-sommerfeld", kind="str", choices=law_names("drag"),
-                     doc="drag closure (registered in fvdem.coupling.closures): " + describe_laws("drag"))
-    lift: str = spec("none", kind="str", choices=law_names("lift"),
-                     doc="lift closure (spherocylinders only): " + describe_laws("lift"))
-    torque: str = spec("none", kind="str", choices=law_names("torque"),
-                       doc="hydrodynamic torque closure (spherocylinders only): " + describe_laws("torque"))
+    drag: str = spec("hoelzer-sommerfeld", kind="str", registry="drag", doc="drag closure")
+    lift: str = spec("none", kind="str", registry="lift", doc="lift closure (spherocylinders only)")
+    torque: str = spec("none", kind="str", registry="torque", doc="hydrodynamic torque closure (spherocylinders only)")
     pressure_gradient_force: bool = spec(True, kind="bool", doc="apply -V_p grad p to the particles")
-    voidage: str = spec("divided", kind="str", choices=("divided", "centroid", "trilinear"),
-                        doc="voidage mapping: 'divided' (satellite points along the axis, each to its cell), "
-                            "'centroid' (whole particle to the cell of its centre), 'trilinear' (satellite "
-                            "points spread over the 8 nearest cell centres, the transpose of the interpolation)")
+    voidage: str = spec("divided", kind="str", registry="voidage", doc="voidage mapping")
     satellites: int = spec(5, kind="int", ge=1, le=1000, doc="satellite points along a spherocylinder's axis")
     minimum_voidage: float = spec(0.2, gt=0.0, lt=1.0, doc="voidage floor; cells below it are reported as over-packed")
     drag_treatment: str = spec("semi-implicit", kind="str", choices=("semi-implicit", "explicit"),
@@ -295,10 +307,15 @@ class Case:
 
 
 # --------------------------------------------------------------------------- parsing
-def _describe_rule(meta) -> str:
+def _describe_rule(meta, live: bool = True) -> str:
+    """The allowed values in words; ``live=False`` names a registry-backed key's registry instead of
+    today's names (for the committed docs/case-reference.md, which a new law must not make stale)."""
     parts = []
-    if meta.get("choices"):
-        return "one of " + ", ".join(repr(c) for c in meta["choices"])
+    if meta.get("registry") and not live:
+        names, _, module = REGISTRIES[meta["registry"]]
+        return f"a name registered in `{module}` (`fvdem laws {meta['registry']}` lists them)"
+    if _choices(meta):
+        return "one of " + ", ".join(repr(c) for c in _choices(meta))
     kinds = {"float": "a number", "int": "an integer", "bool": "true or false", "str": "a string",
              "vec3": "a list of 3 numbers", "bool3": "a list of 3 booleans", "int3": "a list of 3 integers"}
     parts.append(kinds[meta["kind"]])
@@ -382,7 +399,7 @@ def _convert(value, meta, path, problems):
         if not isinstance(value, str):
             problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
             return None
-        if meta.get("choices") and value not in meta["choices"]:
+        if _choices(meta) and value not in _choices(meta):
             problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
             return None
         return value
@@ -676,8 +693,10 @@ def to_toml(case: Case) -> str:
     return "\n".join(lines) + "\n"
 
 
-def schema_reference() -> str:
-    """Markdown reference of every case key, generated from the dataclasses."""
+def schema_reference(live: bool = True) -> str:
+    """Markdown reference of every case key, generated from the dataclasses. ``live``: registry-backed
+    keys list today's registered names and what each is; otherwise they name their registry (the form
+    of the committed docs/case-reference.md)."""
     out = []
 
     def walk(cls, prefix):
@@ -690,8 +709,11 @@ def schema_reference() -> str:
                 walk(f.default_factory, f"{prefix}{f.name}.")
                 continue
             default = f.default if f.default is not MISSING else f.default_factory()
+            doc = meta.get("doc", "")
+            if meta.get("registry") and live:
+                doc += ": " + REGISTRIES[meta["registry"]][1]()
             rows.append(f"| `{prefix}{f.name}` | {_toml_value(default) if default is not None else '(auto)'} | "
-                        f"{_describe_rule(meta)} | {meta.get('doc', '')} |")
+                        f"{_describe_rule(meta, live)} | {doc} |")
         if rows:
             out.append(f"\n### `[{prefix.rstrip('.') or 'top level'}]`\n")
             out.append("| key | default | allowed | meaning |\n|---|---|---|---|")
@@ -701,4 +723,12 @@ def schema_reference() -> str:
     return "\n".join(out) + "\n"
 
 
-__all__ = ["Case", "CaseError", "load_case", "case_from_dict", "to_toml", "parse_override", "schema_reference"]
+def docs_reference() -> str:
+    """docs/case-reference.md: the case-key reference with registry-backed keys naming their registry
+    (tests/test_case.py checks that the committed file is this)."""
+    return ("# Case-file reference\n\nGenerated by `fvdem schema --docs` from `fvdem/case.py`; do not edit. "
+            "`fvdem schema` prints the same tables with today's registered drag, lift, torque and voidage "
+            "names, and `fvdem laws` lists each with its validity and reference.\n" + schema_reference(live=False))
+
+
+__all__ = ["Case", "CaseError", "load_case", "case_from_dict", "to_toml", "parse_override", "schema_reference", "docs_reference"]

@@ -1,4 +1,4 @@
-"""Command line: ``fvdem run | check | report | compare | info | schema``.
+"""Command line: ``fvdem run | check | report | compare | info | schema | laws``.
 
 Input problems (case file, options, output folder) exit with code 2 and a message, never a
 traceback; a run that becomes unstable exits with code 3 and the cause.
@@ -25,7 +25,7 @@ def _fail(message: str, code: int = 2) -> int:
 def cmd_check(args) -> int:
     case = load_case(args.case, _overrides(args.set))
     if case.particles.initial_state is not None and case.particles.count > 0:
-        from .simulation import load_initial_state
+        from .model import load_initial_state
         load_initial_state(case)  # what `fvdem run` refuses before it starts
     print(f"{args.case}: OK ({case.particles.count} {case.particles.shape}s, end {case.time.end:g} s, "
           f"DEM step {case.time.dem_step:g} s = collision time / {case.collision_time() / case.time.dem_step:.1f})")
@@ -85,7 +85,41 @@ def cmd_info(args) -> int:
     return 0
 
 
+def registered(kind: str | None = None) -> dict:
+    """What the registries hold: drag, lift and torque laws, voidage methods and scenes, each name with
+    what it is, where it applies and its reference."""
+    from .coupling.closures import LAWS
+    from .coupling.voidage import METHODS
+    from .scenes import SCENES
+    table = {k: {name: {"summary": l.summary, "shapes": list(l.shapes), "aspect_ratio": l.aspect_ratio,
+                        "validity": l.validity, "reference": l.reference} for name, l in laws.items()}
+             for k, laws in LAWS.items()}
+    table["voidage"] = {name: {"summary": m.summary, "reference": m.reference} for name, m in METHODS.items()}
+    table["scenes"] = {name: {"summary": s.summary} for name, s in SCENES.items()}
+    return table if kind is None else {kind: table[kind]}
+
+
+def cmd_laws(args) -> int:
+    table = registered(args.kind)
+    if args.json:
+        print(json.dumps(table))
+        return 0
+    for kind, entries in table.items():
+        print(f"{kind}:")
+        for name, entry in entries.items():
+            print(f"  {name}: {entry['summary']}")
+            for key in ("shapes", "aspect_ratio", "validity", "reference"):
+                if entry.get(key):
+                    value = ", ".join(entry[key]) if isinstance(entry[key], list) else entry[key]
+                    print(f"      {key.replace('_', ' ')}: {value}")
+    return 0
+
+
 def cmd_schema(args) -> int:
+    if args.docs:
+        from .case import docs_reference
+        print(docs_reference(), end="")
+        return 0
     print(schema_reference())
     return 0
 
@@ -115,12 +149,18 @@ def make_parser() -> argparse.ArgumentParser:
     compare.add_argument("--out", default=".", help="folder for mixing_compare.png and t95.png")
     compare.set_defaults(func=cmd_compare)
     sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)
-    sub.add_parser("schema", help="print the case-file reference (Markdown)").set_defaults(func=cmd_schema)
+    schema = sub.add_parser("schema", help="print the case-file reference (Markdown)")
+    schema.add_argument("--docs", action="store_true", help="the form of docs/case-reference.md (registries by name)")
+    schema.set_defaults(func=cmd_schema)
+    laws = sub.add_parser("laws", help="list the registered closures, voidage methods and scenes")
+    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes"))
+    laws.add_argument("--json", action="store_true", help="one JSON object")
+    laws.set_defaults(func=cmd_laws)
     return parser
 
 
 def main(argv=None) -> int:
-    from .simulation import OutputError
+    from .io.run_folder import OutputError
     from .dem.system import SimulationError
     args = make_parser().parse_args(argv)
     try:

@@ -136,3 +136,13 @@ def test_run_writes_outputs_and_never_overwrites(tmp_path):
     assert result.returncode == 2 and "--overwrite" in result.stderr
     assert (out / "summary.json").read_text() == before
     assert fvdem_cli("run", path, "--out", out, "--overwrite").returncode == 0
+
+
+def test_docs_case_reference_is_generated_from_the_schema():
+    """docs/case-reference.md is ``fvdem schema --docs``; registry-backed keys name their registry, so a
+    new drag law leaves it current (issue 15's recipe touches only the closures module and its test)."""
+    from pathlib import Path
+    from fvdem.case import docs_reference
+    committed = (Path(__file__).resolve().parents[1] / "docs" / "case-reference.md").read_text()
+    assert committed == docs_reference(), "regenerate: fvdem schema --docs > docs/case-reference.md"
+    assert "fvdem laws drag" in committed and "'hoelzer-sommerfeld'" not in committed.split("coupling.drag`")[1][:200]

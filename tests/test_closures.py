@@ -193,10 +193,10 @@ def test_paper_closures_resist_a_packed_bed_less_than_ergun():
 def test_registry_is_what_the_case_checks_and_the_schema_offer():
     """Drag, lift and torque laws come from one registry: the case's allowed names and `fvdem schema`
     list exactly the registered ones, and each law evaluates for the shapes it is registered for."""
-    from fvdem.case import CouplingConfig, schema_reference
+    from fvdem.case import CouplingConfig, _choices, schema_reference
     from fvdem.coupling import closures as c
     from dataclasses import fields
-    choices = {f.name: f.metadata["choices"] for f in fields(CouplingConfig) if f.name in ("drag", "lift", "torque")}
+    choices = {f.name: _choices(f.metadata) for f in fields(CouplingConfig) if f.name in ("drag", "lift", "torque")}
     schema = schema_reference()
     rng = np.random.default_rng(1)
     slip = rng.normal(0.0, 1.0, (6, 3))
@@ -213,3 +213,18 @@ def test_registry_is_what_the_case_checks_and_the_schema_offer():
                     assert value is None or not np.any(value)
                 else:
                     assert np.all(np.isfinite(value)) and np.shape(value)[0] == 6
+
+
+def test_a_law_registered_at_run_time_is_accepted_by_the_case_checks():
+    """The case checks read the registry when a case is read, not a list frozen at import."""
+    import pytest
+    from fvdem.case import CaseError, case_from_dict
+    from fvdem.coupling import closures as c
+    table = {"coupling": {"drag": "my-test-law"}}
+    with pytest.raises(CaseError, match="my-test-law"):
+        case_from_dict(table)
+    c.register("drag", "my-test-law", summary="a test law")(lambda particle, slip, voidage, axis: np.ones(len(slip)))
+    try:
+        assert case_from_dict(table).coupling.drag == "my-test-law"
+    finally:
+        del c.LAWS["drag"]["my-test-law"]

@@ -200,26 +200,26 @@ def test_full_disk_stops_the_run_cleanly_and_keeps_the_last_checkpoint(tmp_path,
     the cause and the remedy; the checkpoint of the last interval is intact and resumes."""
     import errno
 
-    import fvdem.simulation as simulation
+    import fvdem.io.run_folder as run_folder
     path = _write(tmp_path, CASE)
     out = tmp_path / "run"
     sim = fvdem.Simulation(fvdem.load_case(path), out)
     sim.run(0.01)  # a complete checkpoint at 0.01 s
     good = (out / "checkpoint.npz").read_bytes()
-    real_save = simulation.save_checkpoint
+    real_save = run_folder.save_checkpoint
 
     def full_disk(target, arrays, meta):
         with open(str(target) + ".tmp", "wb") as fh:
             fh.write(b"PK\x03\x04 half")  # the disk fills during the write
         raise OSError(errno.ENOSPC, "No space left on device", str(target) + ".tmp")
 
-    monkeypatch.setattr(simulation, "save_checkpoint", full_disk)
-    with pytest.raises(simulation.OutputError) as failure:
+    monkeypatch.setattr(run_folder, "save_checkpoint", full_disk)
+    with pytest.raises(fvdem.OutputError) as failure:
         sim.run(0.01)
     message = str(failure.value)
     assert "No space left on device" in message and "--resume" in message
     assert (out / "checkpoint.npz").read_bytes() == good
-    monkeypatch.setattr(simulation, "save_checkpoint", real_save)
+    monkeypatch.setattr(run_folder, "save_checkpoint", real_save)
     resumed = fvdem.Simulation(fvdem.load_case(path), out, resume=True)
     assert resumed.time == pytest.approx(0.01)
 
@@ -247,3 +247,19 @@ def test_resume_refuses_a_case_with_other_physics_and_accepts_safe_changes(tmp_p
     sim = fvdem.Simulation(fvdem.load_case(path, {"time.end": 0.01, "output.snapshot_interval": 0.002,
                                                   "run.threads": 1}), out, resume=True)
     assert sim.time == pytest.approx(0.005)
+
+
+def test_a_checkpoint_of_the_former_layout_is_read_into_the_scenes_histories():
+    """Checkpoints written before the scenes (issue 15) kept each history under its own key."""
+    from fvdem.io.run_folder import upgrade_writer_state
+    former = {"pvd_entries": [[0.0, "particles_00000.vtu"]], "gas_pvd_entries": [[0.0, "gas_00000.vtu"]],
+              "wall_seconds": 1.5, "cpu_seconds": 2.5, "settled": False,
+              "pressure_history": [[0.1, 900.0]], "mixing_history": [[0.0, 0.1], [0.1, 0.2]],
+              "suspension_history": [[0.1, 15.0, 0.01, 0.002, 0.001]], "orientation_history": [[0.1, 0.5, 0.7]]}
+    now = upgrade_writer_state(former)
+    assert now == {"wall_seconds": 1.5, "cpu_seconds": 2.5, "settled": False,
+                   "snapshots": {"particles": [[0.0, "particles_00000.vtu"]], "gas": [[0.0, "gas_00000.vtu"]]},
+                   "histories": {"bed_pressure": [[0.1, 900.0]], "mixing": [[0.0, 0.1], [0.1, 0.2]],
+                                 "suspension": {"samples": [[0.1, 15.0, 0.01, 0.002, 0.001]],
+                                                "orientations": [[0.1, 0.5, 0.7]]}}}
+    assert upgrade_writer_state(now) == now

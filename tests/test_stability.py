@@ -90,7 +90,7 @@ def test_gas_running_away_stops_the_run_with_the_cause_and_the_setting():
     sim.run(0.01)
     sim.gas.solver.velocity[5, 2] = 40.0  # 12 x U / 0.3
     with pytest.raises(fvdem.SimulationError, match="gas runs away.*gas.cfd_step"):
-        sim._on_events(sim._timeseries_schedule.next_after(sim.step_count))
+        sim._on_events(sim.schedules["timeseries"].next_after(sim.step_count))
 
 
 def test_a_step_grown_far_costlier_than_at_the_start_is_warned_once():
@@ -101,12 +101,12 @@ def test_a_step_grown_far_costlier_than_at_the_start_is_warned_once():
                            "output": {"progress": False}, "time": {"end": 1.0}})
     sim = fvdem.Simulation(case)
     sim.run(0.002)
-    sim._cost_reference, sim._cost_chunks = None, 1  # measure the reference again from the next chunk
-    sim._watch_cost(100, 0.1)  # the reference: 1 ms per step
-    sim._watch_cost(100, 0.5)  # 5 x: nothing
+    sim.watch.reference, sim.watch.chunks = None, 1  # measure the reference again from the next chunk
+    sim.watch.cost(100, 0.1)  # the reference: 1 ms per step
+    sim.watch.cost(100, 0.5)  # 5 x: nothing
     with pytest.warns(RuntimeWarning, match="costs 30 x what it cost at the start.*reduce time.dem_step"):
-        sim._watch_cost(100, 3.0)
+        sim.watch.cost(100, 3.0)
     import warnings
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        sim._watch_cost(100, 3.0)  # once only
+        sim.watch.cost(100, 3.0)  # once only

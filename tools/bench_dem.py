@@ -38,7 +38,7 @@ def worker(shape: str, state: Path, steps: int) -> dict:
 
     import fvdem
     from fvdem.dem.particles import ParticleArrays
-    from fvdem.simulation import build_dem
+    from fvdem.model import build_dem
 
     case = fvdem.load_case(BEDS[shape][1])
     with np.load(state) as data:

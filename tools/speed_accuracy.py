@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 import fvdem
+from fvdem.scenes.observables import weight_per_area
 from fvdem.case import case_from_dict
 from fvdem.dem.system import SimulationError
 from validate_umf import SETTINGS, reduced_bed_table
@@ -110,7 +111,7 @@ def build_case(shape, particles, overrides, threads):
 def measure(case, spin, window, sample, entropy_times):
     """Run spin-up + window; time series sampled every ``sample`` s in the window."""
     sim = fvdem.Simulation(case)
-    weight = sim.bed_weight_per_area()
+    weight = weight_per_area(sim.model)
     wall0, cpu0 = time.perf_counter(), time.process_time()
     drops, heights, voids = [], [], []
     entropy = {}

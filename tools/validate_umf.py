@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import fvdem
+from fvdem.scenes.observables import weight_per_area
 from fvdem.analysis.bed import bed_top, core_particles, core_solids_fraction, uniform_bed_umf
 from fvdem.case import case_from_dict
 from fvdem.coupling.closures import spherocylinder_shape, sphericities
@@ -167,7 +168,7 @@ def main(argv=None):
     umf_exp = EXPERIMENT[shape]
     case = build_case(shape, args.closures, args.particles, args.threads, args.width, args.settings, args.drag)
     sim = fvdem.Simulation(case)
-    weight = sim.bed_weight_per_area()
+    weight = weight_per_area(sim.model)
     sim.run(args.start)
     ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
     if args.quick:

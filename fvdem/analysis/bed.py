@@ -69,6 +69,13 @@ def packed_bed_summary(particles, box) -> dict:
     }
 
 
+def bed_weight_per_area(particles, lower, upper, gravity) -> float:
+    """Particle weight over the column's cross-section, W/A [Pa] (a fluidized bed's pressure drop):
+    ``sum(m) |g| / ((x_hi - x_lo)(y_hi - y_lo))``."""
+    area = (upper[0] - lower[0]) * (upper[1] - lower[1])
+    return float(particles.mass.sum() * np.linalg.norm(gravity) / area)
+
+
 def uniform_bed_umf(model, voidage, axes, particle_density, gravity=9.81):
     """Minimum fluidization velocity [m/s] that the drag closure ``model`` (a
     ``coupling.bridge.HydrodynamicModel``) gives a uniform fixed bed of gas fraction ``voidage``, with

@@ -237,23 +237,44 @@ def plot_suspension(out) -> Path:
     return _save(fig, Path(out) / "suspension.png")
 
 
-def report(out) -> list:
-    """All plots a run folder supports; returns the written paths."""
+def _has_rods(out) -> bool:
+    with np.load(Path(out) / "final_state.npz") as data:
+        return bool(np.any(data["half_length"] > 0))
+
+
+# the plots a scene's observables name (fvdem.scenes): name -> (plot function of a run folder, whether
+# the folder holds what it needs)
+PLOTS = {
+    "timeseries": (plot_timeseries, lambda out: (out / "timeseries.csv").exists()),
+    "colours": (plot_colour_slice, lambda out: (out / "final_state.npz").exists()),
+    "orientation": (plot_orientation, lambda out: (out / "final_state.npz").exists() and _has_rods(out)),
+    "gas_profile": (plot_gas_profile, lambda out: any(out.glob("gas_*.vtu"))),
+    "void_fraction": (plot_void_fraction_histogram, lambda out: len(list(out.glob("gas_*.vtu"))) > 1),
+    "mixing": (lambda out: plot_mixing([out], out / "mixing.png"),
+               lambda out: "mixing_entropy" in read_timeseries(out)),
+    "suspension": (plot_suspension, lambda out: (out / "summary.json").exists()
+                   and "slip_reynolds" in read_timeseries(out)),
+}
+
+
+def plots_of(out) -> tuple:
+    """The plots the run's scene declares (from its case.toml); without one, every plot."""
     out = Path(out)
-    paths = [plot_timeseries(out)]
-    if (out / "final_state.npz").exists():
-        paths.append(plot_colour_slice(out))
-        with np.load(out / "final_state.npz") as data:
-            rods = bool(np.any(data["half_length"] > 0))
-        if rods:
-            paths.append(plot_orientation(out))
-    if any(out.glob("gas_*.vtu")):
-        paths.append(plot_gas_profile(out))
-        if len(list(out.glob("gas_*.vtu"))) > 1:
-            paths.append(plot_void_fraction_histogram(out))
-    series = read_timeseries(out)
-    if "mixing_entropy" in series:
-        paths.append(plot_mixing([out], out / "mixing.png"))
-    if "slip_reynolds" in series and (out / "summary.json").exists():
-        paths.append(plot_suspension(out))
+    from ..case import CaseError, load_case
+    from ..scenes import scene_for
+    try:
+        return scene_for(load_case(out / "case.toml")).plots
+    except (CaseError, OSError):  # no case file, or one this version no longer reads
+        return tuple(PLOTS)
+
+
+def report(out, plots=None) -> list:
+    """The plots of a run folder (``plots``: names in ``PLOTS``; default: those its scene declares)
+    that its files support; returns the written paths."""
+    out = Path(out)
+    paths = []
+    for name in plots or plots_of(out):
+        plot, available = PLOTS[name]
+        if available(out):
+            paths.append(plot(out))
     return paths

@@ -1,0 +1,131 @@
+"""A run's output folder: created without replacing results, resumed only with the same physics, and
+the writers that fill it (VTU/PVD snapshots, checkpoint, final state, summary).
+
+Files: ``case.toml`` (the resolved case), ``timeseries.csv``, ``particles.pvd`` / ``gas.pvd`` with
+their ``*.vtu``, ``checkpoint.npz`` (replaced atomically), ``final_state.npz`` and ``summary.json``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from ..case import Case, to_toml
+from .checkpoint import save_checkpoint
+from .vtk import write_gas_vtu, write_particles_vtu, write_pvd
+
+CHECKPOINT = "checkpoint.npz"
+FINAL_STATE = "final_state.npz"
+
+# keys a resumed run may change: when it ends, what it writes and how it runs; all else is its physics
+RESUME_SAFE = ("name", "description", "time.end", "time.stop_when_settled", "time.settled_speed", "time.min_time",
+               "output.", "run.")
+
+
+class OutputError(RuntimeError):
+    """The output folder cannot be used as asked (exists, or nothing to resume)."""
+
+
+def prepare_output(out_dir, overwrite: bool = False, resume: bool = False) -> Path:
+    """Create the output folder; never replace results unless ``overwrite``."""
+    out = Path(out_dir)
+    try:
+        if resume:
+            if not (out / CHECKPOINT).exists():
+                raise OutputError(f"--resume: {out} holds no {CHECKPOINT} to resume from")
+            return out
+        if out.exists() and any(out.iterdir()):
+            if not overwrite:
+                raise OutputError(f"output folder {out} exists and is not empty; pass --overwrite to replace it "
+                                  "or --resume to continue its run")
+            shutil.rmtree(out)
+        out.mkdir(parents=True, exist_ok=True)
+        return out
+    except OSError as exc:
+        raise OutputError(f"output folder {out}: {exc.strerror or exc}"
+                          + (f" ({exc.filename})" if exc.filename and str(exc.filename) != str(out) else "")) from None
+
+
+def check_resumable(case: Case, out: Path) -> None:
+    """Refuse to resume ``out`` with a case whose physics differs from the one it was started with
+    (its ``case.toml``), naming every key that differs; end time, output and run settings may change."""
+    import tomllib
+    path = out / "case.toml"
+    if not path.exists():
+        return
+    try:
+        before = _flatten(tomllib.loads(path.read_text()))
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise OutputError(f"--resume: {path} cannot be read ({exc}); it records the case the run was started with")
+    now = _flatten(tomllib.loads(to_toml(case)))
+    changed = [key for key in sorted(set(before) | set(now))
+               if before.get(key) != now.get(key) and not any(
+                   key == safe or (safe.endswith(".") and key.startswith(safe)) for safe in RESUME_SAFE)]
+    if changed:
+        listed = "; ".join(f"{k}: {before.get(k, '(unset)')!r} -> {now.get(k, '(unset)')!r}" for k in changed)
+        raise OutputError(f"--resume: the case differs from the one {out} was started with in {listed}. A resumed run "
+                          "continues the same physics; change only time.end, output.* or run.*, or start a new "
+                          "run folder")
+
+
+def _flatten(table, prefix=""):
+    flat = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            flat.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def write_snapshot(out: Path, model, entries: dict) -> None:
+    """VTU snapshots of the particles and the gas, listed in ``particles.pvd`` / ``gas.pvd``;
+    ``entries`` holds the (time, file) rows of each collection (kept in the checkpoint)."""
+    if model.dem is not None:
+        rows = entries.setdefault("particles", [])
+        name = f"particles_{len(rows):05d}.vtu"
+        write_particles_vtu(out / name, model.particles)
+        rows.append((model.time, name))
+        write_pvd(out / "particles.pvd", rows)
+    if model.gas is not None:
+        rows = entries.setdefault("gas", [])
+        name = f"gas_{len(rows):05d}.vtu"
+        write_gas_vtu(out / name, model.gas.mesh, model.gas.solver)
+        rows.append((model.time, name))
+        write_pvd(out / "gas.pvd", rows)
+
+
+def write_checkpoint(out: Path, model, meta: dict) -> None:
+    save_checkpoint(out / CHECKPOINT, model.state(), meta)
+
+
+def write_final(out: Path, particles, summary: dict) -> None:
+    """``final_state.npz`` (the particles in id order, written atomically) and ``summary.json``."""
+    if particles is not None:
+        order = np.argsort(particles.ids, kind="stable")
+        tmp = out / (FINAL_STATE + ".tmp")
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **{k: v[order] for k, v in particles.as_dict().items()})
+        os.replace(tmp, out / FINAL_STATE)
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+
+
+# checkpoints written before the scenes (up to b38a3bd) kept each history under its own key
+_FORMER = {"pvd_entries": ("snapshots", "particles"), "gas_pvd_entries": ("snapshots", "gas"),
+           "pressure_history": ("histories", "bed_pressure"), "mixing_history": ("histories", "mixing")}
+
+
+def upgrade_writer_state(meta: dict) -> dict:
+    """A checkpoint's writer state in today's form (``snapshots`` and ``histories`` by name)."""
+    meta = dict(meta)
+    tables = {"snapshots": dict(meta.pop("snapshots", {})), "histories": dict(meta.pop("histories", {}))}
+    for old, (table, name) in _FORMER.items():
+        if old in meta:
+            tables[table][name] = meta.pop(old)
+    samples, orientations = meta.pop("suspension_history", None), meta.pop("orientation_history", [])
+    if samples:
+        tables["histories"]["suspension"] = {"samples": samples, "orientations": orientations}
+    return {**meta, **tables}

@@ -1,0 +1,79 @@
+"""Watches over a running model: a step whose cost runs away, a gas that runs away.
+
+Neither changes the state: the cost watch warns once (with the numbers that tell a violent bed from a
+struggling gas step), the gas watch stops the run with ``SimulationError`` naming the setting to change.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .dem.system import SimulationError
+
+# a step costing this many times the run's first measured rate is warned about (once)
+RUNAWAY_COST = 20.0
+# a walled column's gas faster than this many times the speed its inlet (in the densest packing) or
+# its particles drive is stopped: the 10x-continuity defect of issue 14 reached 20-50x
+RUNAWAY_GAS_SPEED = 10.0
+
+
+def particle_speeds(model) -> tuple[float, float]:
+    """Largest particle speed [m/s] and largest overlap over diameter of the model's particles."""
+    d = model.dem.diagnostics()
+    return d["max_speed"], d["max_overlap_over_diameter"]
+
+
+class RunawayWatch:
+    """``cost(steps, seconds)`` after each chunk of loop steps; ``gas(gas_max_speed)`` at each sample."""
+
+    def __init__(self, model):
+        self.model = model
+        self.reference = None  # (seconds per step, neighbour rebuilds, step) from the second chunk
+        self.chunks = 0
+        self.warned = False
+
+    def cost(self, steps: int, seconds: float) -> None:
+        """Warn once when the wall time per step grows past ``RUNAWAY_COST`` times the run's first
+        measured rate (the first chunk holds numba's compilation and is skipped)."""
+        if steps <= 0 or seconds <= 0:
+            return
+        model, rate = self.model, seconds / steps
+        rebuilds = model.dem.rebuild_count if model.dem is not None else 0
+        if self.reference is None:
+            self.chunks += 1
+            if self.chunks > 1:
+                self.reference = (rate, rebuilds, model.step_count)
+            return
+        if self.warned or rate < RUNAWAY_COST * self.reference[0]:
+            return
+        self.warned = True
+        ref_rate, ref_rebuilds, ref_step = self.reference
+        gas = ""
+        if model.gas is not None:
+            speed = float(np.linalg.norm(model.gas.solver.velocity, axis=1).max())
+            gas = f"; gas: largest speed {speed:.3g} m/s, Courant number {model.gas.courant_number():.3g}"
+        particles = ""
+        if model.dem is not None:
+            speed, overlap = particle_speeds(model)
+            particles = (f"; particles: largest speed {speed:.3g} m/s, largest overlap {overlap:.3g} d, "
+                         f"{rebuilds - ref_rebuilds} neighbour-list rebuilds in {model.step_count - ref_step} steps")
+        warnings.warn(f"t = {model.time:.4g} s: a step costs {rate / ref_rate:.0f} x what it cost at the start "
+                      f"({rate * 1e3:.3g} ms against {ref_rate * 1e3:.3g} ms){particles}{gas}. If the bed has gone "
+                      "violent, reduce time.dem_step and gas.cfd_step (docs/speed-accuracy.md)",
+                      RuntimeWarning, stacklevel=3)
+
+    def gas(self, gas_max_speed: float) -> None:
+        """Stop a walled column whose gas runs far faster than anything drives it: the inlet's
+        interstitial speed in the densest packing (U / 0.3) and the fastest particle."""
+        gas = self.model.gas
+        if gas is None or gas.solver.periodic or gas.config.inlet_velocity <= 0:
+            return
+        fastest = particle_speeds(self.model)[0] if self.model.dem is not None else 0.0
+        drive = max(gas.config.inlet_velocity / 0.3, fastest)
+        if gas_max_speed > RUNAWAY_GAS_SPEED * drive:
+            raise SimulationError(
+                f"the gas runs away at t = {self.model.time:.6g} s: largest cell speed {gas_max_speed:.3g} m/s, "
+                f"{gas_max_speed / drive:.0f} x the fastest speed the inlet or the particles drive ({drive:.3g} m/s); "
+                f"largest Courant number {gas.courant_number():.3g} at gas.cfd_step = {gas.dt:g} s: reduce "
+                "gas.cfd_step (docs/speed-accuracy.md)")

@@ -1,0 +1,154 @@
+"""Observables shared by the scenes (``fvdem.scenes.base.Observable``): the particles' state, the gas,
+the mixing of two colours, the gas-particle exchange and a column's pressure drop over the bed weight."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..analysis.bed import bed_top, bed_weight_per_area, packed_bed_summary
+from ..analysis.mixing import mixing_indices, mixing_time
+from .base import Observable
+
+
+class Particles(Observable):
+    """DEM state: kinetic energy [J], largest overlap / d, contacts per particle, bed top (99th
+    percentile of the particle tops) [m], rms and largest speed [m/s]; the summary adds the packed
+    bed (core solids fraction, equivalent height), cost per particle-step and neighbour rebuilds."""
+
+    name = "particles"
+    plots = ("colours", "orientation")
+    COLUMNS = ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle", "bed_top", "rms_speed",
+               "max_speed")
+
+    def columns(self, model):
+        return self.COLUMNS
+
+    def measure(self, model, values):
+        p = model.particles
+        out = model.dem.diagnostics()
+        del out["time"]
+        out["bed_top"] = bed_top(p.position, p.axis, p.radius, p.half_length)
+        return out
+
+    def summary(self, model, values, history, run):
+        n, case = model.particles.count, model.case
+        out = {"particles": n, "shape": case.particles.shape,
+               "ns_per_particle_step_last_run": 1e9 * run["wall"] / (run["steps"] * n) if run["steps"] else None,
+               "collision_time": case.collision_time(), "neighbour_rebuilds": model.dem.rebuild_count,
+               **{k: values[k] for k in ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle",
+                                         "wall_contacts", "rms_speed", "max_speed")}}
+        out.update(packed_bed_summary(model.particles, model.dem.box))
+        return out
+
+
+class Gas(Observable):
+    """Largest cell speed [m/s], mean pressure of the first cell layer [Pa]; in a walled column the
+    pressure drop the particles hold up [Pa]; with a porous zone its pressure gradient and Ergun's."""
+
+    name = "gas"
+    plots = ("gas_profile", "void_fraction")
+
+    def columns(self, model):
+        columns = ("gas_max_speed", "gas_inlet_pressure")
+        if model.gas.zone.any():
+            columns += ("porous_zone_pressure_gradient",)
+        if not model.gas.solver.periodic:
+            columns += ("bed_pressure_drop",)
+        return columns
+
+    def measure(self, model, values):
+        return model.gas.diagnostics()
+
+    def summary(self, model, values, history, run):
+        out = {k: v for k, v in values.items() if k.startswith(("gas_", "porous_", "ergun_", "expected_"))}
+        out.update(gas_cells=model.gas.mesh.cell_count, gas_courant_number=model.gas.courant_number())
+        return out
+
+
+def mixing_cells(case) -> tuple:
+    """The mixing-entropy grid: ``output.mixing_cells``, else half the gas grid (the paper's 5 x 5 x 35 on
+    10 x 10 x 70), else 5 x 5 x 35."""
+    if case.output.mixing_cells is not None:
+        return tuple(case.output.mixing_cells)
+    if case.gas.enabled:
+        return tuple(max(1, n // 2) for n in case.gas.cells)
+    return (5, 5, 35)
+
+
+class Mixing(Observable):
+    """Mixing entropy and Lacey index of two colours on the ``mixing_cells`` grid; the summary adds
+    the mixing time t95 (entropy first at 0.95; None while not reached)."""
+
+    name = "mixing"
+    plots = ("mixing",)
+    keeps_history = True
+
+    def __init__(self, case):
+        self.cells = mixing_cells(case)
+
+    def columns(self, model):
+        return ("mixing_entropy", "lacey_index")
+
+    def measure(self, model, values):
+        p, d = model.particles, model.case.domain
+        entropy, lacey = mixing_indices(p.position, p.colour, d.lower, d.upper, self.cells)
+        return {"mixing_entropy": entropy, "lacey_index": lacey}
+
+    def record(self, model, values, history):
+        if not history or history[-1][0] < model.time:
+            history.append((model.time, values["mixing_entropy"]))
+
+    def summary(self, model, values, history, run):
+        rows = np.asarray(history, float).reshape(-1, 2)
+        return {"mixing_entropy": values["mixing_entropy"], "lacey_index": values["lacey_index"],
+                "mixing_cells": list(self.cells), "t95": mixing_time(rows[:, 0], rows[:, 1]) if len(rows) else None}
+
+
+class Coupling(Observable):
+    """The exchange: over-packed cells, the drag and pressure-gradient force on the particles along z
+    [N]; the summary names the closures and gives the particle weight per cross-section W/A [Pa]."""
+
+    name = "coupling"
+
+    def columns(self, model):
+        return ("over_packed_cells", "total_drag_z", "total_pressure_force_z")
+
+    def measure(self, model, values):
+        return model.bridge.diagnostics()
+
+    def summary(self, model, values, history, run):
+        m, c = model.bridge.model, model.case.coupling
+        return {"coupling": {"drag": m.drag, "lift": m.lift, "torque": m.torque, "drag_treatment": c.drag_treatment,
+                             "voidage": c.voidage},
+                "bed_weight_per_area": weight_per_area(model)}
+
+
+def weight_per_area(model) -> float:
+    d = model.case.domain
+    return bed_weight_per_area(model.particles, d.lower, d.upper, d.gravity)
+
+
+class BedPressure(Observable):
+    """A column's bed pressure drop over W/A (1 when the gas carries the bed); the summary gives its
+    mean and standard deviation over the run's second half."""
+
+    name = "bed_pressure"
+    keeps_history = True
+
+    def columns(self, model):
+        return ("pressure_drop_over_weight",)
+
+    def measure(self, model, values):
+        return {"pressure_drop_over_weight": values["bed_pressure_drop"] / weight_per_area(model)}
+
+    def record(self, model, values, history):
+        if model.step_count > 0:
+            history.append((model.time, values["bed_pressure_drop"]))
+
+    def summary(self, model, values, history, run):
+        rows = np.asarray(history, float).reshape(-1, 2)
+        late = rows[rows[:, 0] >= 0.5 * model.time] if len(rows) else rows
+        if not len(late):
+            return {}
+        mean = float(late[:, 1].mean())
+        return {"bed_pressure_drop_mean_second_half": mean, "bed_pressure_drop_std_second_half": float(late[:, 1].std()),
+                "pressure_drop_over_weight": mean / weight_per_area(model), "pressure_samples_second_half": int(len(late))}

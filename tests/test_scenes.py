@@ -1,0 +1,66 @@
+"""Scenes (issue 15): every case is exactly one registered scene, the scene decides what is measured,
+and the orchestration holds no scene-specific name."""
+import re
+from pathlib import Path
+
+import pytest
+
+from fvdem.case import case_from_dict
+from fvdem.model import stepping_of
+from fvdem.scenes import SCENES, scene_for
+from output_keys import CASES, case_of
+
+ROOT = Path(__file__).resolve().parents[1]
+EXPECTED = {"ar1": "fluidized_bed", "ar4_mp": "fluidized_bed", "ar4_mp_drag": "fluidized_bed",
+            "ar4_sp": "fluidized_bed", "coupled_small": "fluidized_bed", "demo": "fluidized_bed",
+            "bed_ar1": "settling", "bed_ar4": "settling", "fixed_bed_gas": "fixed_bed",
+            "hindered_settling": "periodic_suspension"}
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_each_case_is_one_scene(name):
+    case = case_of(name)
+    assert [n for n, kind in SCENES.items() if kind.applies(case)] == [EXPECTED[name]]
+    assert scene_for(case).name == EXPECTED[name]
+
+
+@pytest.mark.parametrize("particles, fixed, gas, coupled, periodic, scene, stepping", [
+    (100, False, True, True, False, "fluidized_bed", "coupled"),
+    (100, False, True, True, True, "periodic_suspension", "coupled"),
+    (100, True, True, True, False, "fixed_bed", "coupled"),
+    (100, True, True, False, False, "fixed_bed", "gas"),
+    (0, False, True, True, False, "fixed_bed", "gas"),
+    (100, False, True, False, False, "settling", "side-by-side"),
+    (100, False, False, True, False, "settling", "dem"),
+    (100, False, False, True, True, "settling", "dem"),
+])
+def test_every_combination_has_exactly_one_scene_and_one_stepping(particles, fixed, gas, coupled, periodic,
+                                                                   scene, stepping):
+    table = {"particles": {"count": particles, "fixed": fixed, "diameter": "5 mm"},
+             "domain": {"upper": [0.05, 0.05, 0.2], "periodic": [periodic] * 3},
+             "gas": {"enabled": gas, "cells": [2, 2, 8]}, "coupling": {"enabled": coupled}}
+    if fixed and not gas:
+        return
+    case = case_from_dict(table)
+    assert [n for n, kind in SCENES.items() if kind.applies(case)] == [scene]
+    assert stepping_of(case) == stepping
+
+
+def test_simulation_holds_no_scene_specific_name():
+    source = (ROOT / "fvdem" / "simulation.py").read_text()
+    words = ["suspension", "mixing", "pressure_drop", "bed_weight", "porous", "slip_reynolds", "fluidized",
+             "colour", "periodic", "t95", "orientation"] + list(SCENES)
+    found = [w for w in words if re.search(w, source, re.IGNORECASE)]
+    assert not found, f"simulation.py names {found}: that belongs in fvdem/scenes/"
+    assert len(source.splitlines()) <= 230
+
+
+def test_report_draws_what_the_scene_declares(tmp_path):
+    import fvdem
+    from fvdem.analysis.plots import plots_of, report
+    out = tmp_path / "demo"
+    fvdem.Simulation(case_of("demo"), out, threads=1).run()
+    assert plots_of(out) == ("timeseries", "colours", "orientation", "gas_profile", "void_fraction", "mixing")
+    written = sorted(p.name for p in report(out))
+    # spheres: no orientation plot
+    assert written == ["colours.png", "gas_profile.png", "mixing.png", "timeseries.png", "void_fraction.png"]
