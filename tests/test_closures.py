@@ -228,3 +228,104 @@ def test_a_law_registered_at_run_time_is_accepted_by_the_case_checks():
         assert case_from_dict(table).coupling.drag == "my-test-law"
     finally:
         del c.LAWS["drag"]["my-test-law"]
+
+
+# --------------------------------------------------------------------------- dense-suspension laws
+DENSE = ("beetstra",)
+
+
+def dense_normalised(name, solids, reynolds, diameter=D, length=None, axis=(0.0, 0.0, 1.0)):
+    """F = c / (3 pi mu d_p eps) of the registered law at solids fraction and superficial Re, slip along z."""
+    from fvdem.coupling import closures as c
+    particle = c.ParticleShape(diameter, length or diameter, RHO, MU)
+    d_p, eps = particle.equivalent_diameter, 1.0 - np.asarray(solids, float)
+    speed = np.asarray(reynolds, float) * MU / (RHO * d_p * eps)
+    slip = np.zeros((np.size(speed), 3))
+    slip[:, 2] = speed
+    axes = np.tile(np.asarray(axis, float) / np.linalg.norm(axis), (len(slip), 1))
+    coefficient = c.law("drag", name).function(particle, slip, np.broadcast_to(eps, speed.shape).copy(), axes)
+    return coefficient / (3 * np.pi * MU * d_p * eps)
+
+
+def schiller_naumann(re):
+    return 1.0 + 0.15 * re ** 0.687
+
+
+@pytest.fixture(autouse=False)
+def quiet_ranges():
+    import warnings
+    from fvdem.coupling.closures import reset_range_warnings
+    reset_range_warnings()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        yield
+    reset_range_warnings()
+
+
+@pytest.mark.parametrize("name", DENSE)
+def test_dense_laws_reduce_to_stokes_drag_of_an_isolated_sphere(name, quiet_ranges):
+    assert dense_normalised(name, 1e-12, 1e-10)[0] == pytest.approx(1.0, rel=1e-4)
+
+
+@pytest.mark.parametrize("name", DENSE)
+def test_dense_laws_at_low_re_match_carman_kozeny_in_a_packed_bed(name, quiet_ranges):
+    """Carman (1937): a packed bed's creeping-flow resistance, per particle F_tot = 10 phi / eps^3
+    (Kozeny constant 5); F = eps F_tot. Van der Hoef et al. (2005) found their arrays on it for phi > 0.4."""
+    for phi in (0.4, 0.5, 0.6):
+        f_tot = dense_normalised(name, phi, 1e-8)[0] / (1 - phi)
+        assert f_tot == pytest.approx(10 * phi / (1 - phi) ** 3, rel=0.10), phi
+
+
+@pytest.mark.parametrize("name", DENSE)
+def test_dense_laws_in_a_dilute_array_follow_kim_and_russel(name, quiet_ranges):
+    """Kim & Russel (1985), random arrays in Stokes flow at small phi:
+    F_tot = 1 + (3 / sqrt 2) phi^1/2 + (135/64) phi ln phi + 16.14 phi."""
+    phi = 0.01
+    f_tot = dense_normalised(name, phi, 1e-8)[0] / (1 - phi)
+    assert f_tot == pytest.approx(1 + 3 / np.sqrt(2) * phi ** 0.5 + 135 / 64 * phi * np.log(phi) + 16.14 * phi, rel=0.08)
+
+
+def test_beetstra_isolated_limit_is_its_own_single_sphere_fit():
+    """At phi -> 0 Beetstra's law is 1 + 0.413 Re/24 (1 + 8.4 Re^-0.343) / (1 + Re^-1/2): near
+    Schiller-Naumann at small Re, far above it at high Re (a fit to arrays with phi >= 0.1)."""
+    from fvdem.coupling.closures import beetstra_normalised
+    re = np.array([1.0, 10.0, 100.0, 1000.0])
+    limit = beetstra_normalised(0.0, re)
+    np.testing.assert_allclose(limit, 1 + 0.413 * re / 24 * (1 + 8.4 * re ** -0.343) / (1 + re ** -0.5), rtol=1e-14)
+    ratio = limit / schiller_naumann(re)
+    np.testing.assert_allclose(ratio, [0.940, 0.942, 1.159, 1.686], atol=1e-3)
+
+
+def test_beetstra_published_form_at_a_dense_moderate_re_point():
+    """Beetstra et al. (2007) Eq. 15 evaluated by hand at phi = 0.4, Re = 100: F0 = 10(0.4)/0.36 +
+    0.36 (1 + 1.5 sqrt 0.4) = 11.8127, F1 = 0.413 (100)/(24 (0.36)) (1/0.6 + 0.72 + 8.4 (100)^-0.343)
+    / (1 + 10^1.2 100^-1.3) = 18.929."""
+    from fvdem.coupling.closures import beetstra_normalised
+    assert beetstra_normalised(0.4, 100.0) == pytest.approx(11.8127 + 18.929, rel=2e-4)
+
+
+@pytest.mark.parametrize("name", DENSE)
+def test_dense_laws_for_spherocylinders_tend_to_the_sphere_law_as_the_rod_shrinks(name, quiet_ranges):
+    phi, re = np.array([0.3]), np.array([200.0])
+    sphere = dense_normalised(name, phi, re)[0]
+    # Hoelzer-Sommerfeld's Newton term goes as (-log Phi)^0.2: the limit is continuous but slow
+    gaps = [dense_normalised(name, phi, re, diameter=D, length=D * (1 + e), axis=(1.0, 0.0, 0.0))[0] / sphere - 1
+            for e in (1e-3, 1e-6, 1e-9, 1e-12)]
+    assert gaps == sorted(gaps, reverse=True) and gaps[0] < 0.03 and 0 <= gaps[-1] < 1e-3
+    # AR-4: broadside (axis across the slip) resists more than end-on, both more than the sphere's
+    end_on = dense_normalised(name, phi, re, diameter=3e-3, length=12e-3, axis=(0.0, 0.0, 1.0))
+    broadside = dense_normalised(name, phi, re, diameter=3e-3, length=12e-3, axis=(1.0, 0.0, 0.0))
+    assert broadside[0] > end_on[0]
+
+
+def test_a_dense_law_outside_its_range_warns_once_with_the_range_and_the_value():
+    from fvdem.coupling.closures import reset_range_warnings
+    import warnings
+    reset_range_warnings()
+    with pytest.warns(RuntimeWarning, match=r"'beetstra' used at Re 2e\+03, above its fitted range 0-1000"):
+        dense_normalised("beetstra", 0.3, 2000.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        dense_normalised("beetstra", 0.3, 3000.0)  # the same bound: not again
+        dense_normalised("beetstra", 0.3, 500.0)  # inside: nothing
+    reset_range_warnings()
