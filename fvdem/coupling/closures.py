@@ -444,6 +444,21 @@ def _gidaspow(particle, slip, voidage, axis):
                                      particle.viscosity, sphericity)
 
 
+def tenneti_normalised(solids, reynolds):
+    """Tenneti, Garg & Subramaniam (2011), Int. J. Multiph. Flow 37, 1072, Eqs. 9-12 (immersed-boundary
+    DNS, random fixed arrays of spheres). Their force includes the pressure share (``F_tot``)::
+
+        F_tot = F_isol / eps^3 + 5.81 phi / eps^3 + 0.48 phi^(1/3) / eps^4 + phi^3 Re (0.95 + 0.61 phi^3 / eps^2)
+
+    with Schiller-Naumann's ``F_isol = 1 + 0.15 Re^0.687``; returned as the drag ``F = eps F_tot``.
+    Fitted for 0.1 <= phi <= 0.5 and 0.01 <= Re <= 300; at phi -> 0 it is Schiller-Naumann's isolated sphere."""
+    phi, re = np.asarray(solids, float), np.asarray(reynolds, float)
+    eps = 1.0 - phi
+    total = ((1.0 + 0.15 * re ** 0.687) / eps ** 3 + 5.81 * phi / eps ** 3 + 0.48 * phi ** (1.0 / 3.0) / eps ** 4
+             + phi ** 3 * re * (0.95 + 0.61 * phi ** 3 / eps ** 2))
+    return eps * total
+
+
 def _dense(name, normalised, re_range, solids_range):
     """The registered form of a dense-suspension law: the sphere law on the volume-equivalent
     diameter, times ``non_spherical_factor`` for spherocylinders, warning once outside its range."""
@@ -462,6 +477,14 @@ register("drag", "beetstra", validity="solids fraction 0.1-0.6, Re 0-1000 (super
          reference="Beetstra, van der Hoef & Kuipers (2007), AIChE J. 53, 489-501, Eq. 15",
          summary="Beetstra-van der Hoef-Kuipers 2007 (lattice-Boltzmann random sphere arrays; rods by the "
                  "isolated shape ratio)")(_dense("beetstra", beetstra_normalised, (0.0, 1000.0), (0.1, 0.6)))
+
+
+register("drag", "tenneti", validity="solids fraction 0.1-0.5, Re 0.01-300 (superficial); spherocylinders: "
+         "times the isolated Hoelzer-Sommerfeld shape ratio",
+         reference="Tenneti, Garg & Subramaniam (2011), Int. J. Multiph. Flow 37, 1072-1092, Eqs. 9-12",
+         summary="Tenneti-Garg-Subramaniam 2011 (immersed-boundary DNS of random sphere arrays; Schiller-Naumann "
+                 "when dilute; rods by the isolated shape ratio)")(_dense("tenneti", tenneti_normalised, (0.0, 300.0),
+                                                                            (0.0, 0.5)))
 
 
 @register("drag", "none", summary="no drag")
