@@ -231,7 +231,7 @@ def test_a_law_registered_at_run_time_is_accepted_by_the_case_checks():
 
 
 # --------------------------------------------------------------------------- dense-suspension laws
-DENSE = ("beetstra", "tenneti")
+DENSE = ("beetstra", "tenneti", "tang")
 
 
 def dense_normalised(name, solids, reynolds, diameter=D, length=None, axis=(0.0, 0.0, 1.0)):
@@ -346,3 +346,13 @@ def test_tenneti_published_form_and_its_total_force():
     # below Beetstra's at this point (24.8 against 30.7): Tenneti et al. fit a weaker inertial rise
     from fvdem.coupling.closures import beetstra_normalised
     assert tenneti_normalised(0.4, 100.0) < beetstra_normalised(0.4, 100.0)
+
+
+def test_tang_isolated_limit_and_published_form():
+    """Tang et al. (2015) Eq. 20: at phi -> 0, 1 + Re (0.2334 Re^-0.343 - 0.00456); by hand at phi = 0.4,
+    Re = 100: 11.8127 + 100 [0.0616 - 0.035185 + (0.1014 + 0.49691)(0.20609)] = 11.8127 + 14.972."""
+    from fvdem.coupling.closures import tang_normalised
+    re = np.array([50.0, 100.0, 1000.0])
+    np.testing.assert_allclose(tang_normalised(0.0, re), 1 + re * (0.2334 * re ** -0.343 - 0.00456), rtol=1e-13)
+    np.testing.assert_allclose(tang_normalised(0.0, re) / schiller_naumann(re), [1.193, 1.177, 1.001], atol=2e-3)
+    assert tang_normalised(0.4, 100.0) == pytest.approx(11.8127 + 14.972, rel=2e-4)
