@@ -43,6 +43,8 @@ def cmd_run(args) -> int:
         print(f"stopped at t = {sim.time:.6g} s; continue with: fvdem run {args.case} --out {out} --resume",
               file=sys.stderr)
         return 130
+    from .timing import format_table
+    print(format_table(summary["timings"], summary["threads"], summary["steps"], summary["simulated_time"]))
     keys = ("simulated_time", "steps", "wall_seconds", "bed_height", "solids_fraction", "contacts_per_particle",
             "max_overlap_over_diameter", "porous_zone_pressure_gradient", "expected_pressure_gradient")
     print(json.dumps({k: round(summary[k], 12) if isinstance(summary[k], float) else summary[k]

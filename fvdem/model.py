@@ -25,6 +25,7 @@ from .dem.packing import compress_periodic
 from .dem.particles import ParticleArrays
 from .dem.system import Box, ContactModel, DEMSystem
 from .gas.phase import GasPhase
+from .timing import Timings
 
 STEPPINGS = ("coupled", "gas", "dem", "side-by-side")
 
@@ -116,11 +117,13 @@ def build_dem(case: Case, particles: ParticleArrays) -> DEMSystem:
 class Model:
     """DEM, gas and bridge of a case, stepped together (``stepping``, see the module docstring).
 
-    ``state`` (``None``: build the particles from the case) is a checkpoint's arrays to continue from.
+    ``state`` (``None``: build the particles from the case) is a checkpoint's arrays to continue from;
+    ``timings`` the phases' seconds so far (``fvdem.timing``).
     """
 
-    def __init__(self, case: Case, state: dict | None = None):
+    def __init__(self, case: Case, state: dict | None = None, timings: Timings | None = None):
         self.case = case
+        self.timings = timings or Timings()  # seconds per phase, shared by DEM, gas and bridge
         self.stepping = stepping_of(case)
         has_particles = case.particles.count > 0
         self.time_step = case.gas.cfd_step if self.stepping in ("coupled", "gas") else case.time.dem_step
@@ -135,6 +138,10 @@ class Model:
                                                       if k.startswith("particles.")})
                 self.dem = build_dem(case, particles)
                 self.dem.restore(state)
+        if self.dem is not None:
+            self.dem.timings = self.timings
+        if self.gas is not None:
+            self.gas.solver.timings = self.timings
         if self.stepping == "coupled":  # before the gas restore: the bridge maps a start-up voidage
             self.bridge = CouplingBridge(case, self.dem, self.gas)
         if state is not None and self.gas is not None:  # the last step's voidage, not a remapped one

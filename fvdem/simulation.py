@@ -20,6 +20,7 @@ from .io.timeseries import TimeseriesWriter
 from .model import Model, build_dem, build_particles, load_initial_state, set_threads
 from .monitors import RunawayWatch
 from .scenes import scene_for
+from .timing import Timings
 
 
 @dataclass
@@ -41,6 +42,7 @@ class _RunState:
     wall_seconds: float = 0.0
     cpu_seconds: float = 0.0
     settled: bool = False
+    timings: dict = field(default_factory=dict)  # phase -> seconds (fvdem.timing)
 
     @classmethod
     def from_checkpoint(cls, meta: dict, histories: dict) -> "_RunState":
@@ -70,15 +72,16 @@ class Simulation:
             check_resumable(case, self.out)
         self.scene = scene_for(case)
         arrays, meta = load_checkpoint(self.out / CHECKPOINT) if resume else (None, None)
-        self.model = Model(case, arrays)
-        self.watch = RunawayWatch(self.model)
         self.run_state = (_RunState(histories=self.scene.new_histories()) if meta is None
                           else _RunState.from_checkpoint(meta["writers"], self.scene.new_histories()))
+        self.model = Model(case, arrays, Timings(self.run_state.timings))
+        self.watch = RunawayWatch(self.model)
         o, dt = case.output, self.model.time_step
         self.schedules = {name: _Schedule(max(1, round(interval / dt))) for name, interval in
                           (("timeseries", o.timeseries_interval), ("snapshot", o.snapshot_interval),
                            ("checkpoint", o.checkpoint_interval))}
         self._stop_requested = False
+        self._segment = None  # (wall, cpu) clocks at the start of the current run() call
         if self.out is not None:
             self._timeseries = TimeseriesWriter(self.out / "timeseries.csv", self.scene.columns(self.model))
             if resume:
@@ -114,7 +117,7 @@ class Simulation:
         end_step = int(round(end_time / self.time_step))
         start_step = self.step_count
         bar = self._progress_bar(end_time)
-        wall0, cpu0 = _time.perf_counter(), _time.process_time()
+        wall0, cpu0 = self._segment = _time.perf_counter(), _time.process_time()
         handlers = self._install_signal_handlers()
         try:
             while self.step_count < end_step and not self._stop_requested and not self.run_state.settled:
@@ -123,7 +126,9 @@ class Simulation:
                 chunk_start = _time.perf_counter()
                 self.model.advance(target - step)
                 self.watch.cost(target - step, _time.perf_counter() - chunk_start)
+                events_start = _time.perf_counter()
                 self._write_guarded(self._on_events, self.step_count)
+                self.model.timings.add("output", _time.perf_counter() - events_start)
                 if bar is not None:
                     bar.update(self.time - bar.n)
                     elapsed = _time.perf_counter() - wall0
@@ -135,6 +140,8 @@ class Simulation:
                 bar.close()
             self.run_state.wall_seconds += _time.perf_counter() - wall0
             self.run_state.cpu_seconds += _time.process_time() - cpu0
+            self.run_state.timings = dict(self.model.timings.seconds)
+            self._segment = None
         summary = self.summary(self.step_count - start_step, _time.perf_counter() - wall0)
         if self.out is not None:
             self._write_guarded(self._write_checkpoint)
@@ -145,7 +152,8 @@ class Simulation:
         """The run's summary: time, steps, cost, and what the scene's observables derive."""
         summary = {"case": self.case.name, "simulated_time": self.time, "steps": self.step_count,
                    "settled": self.run_state.settled, "stopped_early": self._stop_requested, "threads": self.threads,
-                   "wall_seconds": self.run_state.wall_seconds, "cpu_seconds": self.run_state.cpu_seconds}
+                   "wall_seconds": self.run_state.wall_seconds, "cpu_seconds": self.run_state.cpu_seconds,
+                   "timings": self.model.timings.table(self.run_state.wall_seconds)}
         summary.update(self.scene.summary(self.model, self.diagnostics(), self.run_state.histories,
                                           {"steps": steps, "wall": wall}))
         return summary
@@ -178,7 +186,13 @@ class Simulation:
             self._write_checkpoint()
 
     def _write_checkpoint(self) -> None:
-        write_checkpoint(self.out, self.model, {"writers": asdict(self.run_state), "time": self.time})
+        """The model's arrays and the run state as of now (cost so far included: a killed run keeps it)."""
+        state = asdict(self.run_state)
+        state["timings"] = dict(self.model.timings.seconds)
+        if self._segment is not None:
+            state["wall_seconds"] += _time.perf_counter() - self._segment[0]
+            state["cpu_seconds"] += _time.process_time() - self._segment[1]
+        write_checkpoint(self.out, self.model, {"writers": state, "time": self.time})
 
     def _write_guarded(self, write, *args) -> None:
         """Run a writer; a full disk or an unwritable folder stops the run with ``OutputError`` (the

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from time import perf_counter
 
 import numpy as np
 
@@ -144,10 +145,21 @@ class CouplingBridge:
         dem, gas, cfg = self.dem, self.gas, self.config
         p, s, mesh = dem.particles, gas.solver, self.mesh
         dt = self.cfd_step
+        clock, timings = perf_counter, dem.timings
+        t_start = clock()
         grid_map = self._grid_map()
         eps = self._voidage(grid_map)
         if cfg.two_way:  # one-way coupling: the gas does not see the particles at all
             gas.set_voidage(eps)
+        t_mapped = clock()
+        deposited = 0.0
+
+        def scatter(values):  # the deposition phase: particle values to the cells
+            nonlocal deposited
+            t = clock()
+            out = grid_map.scatter(values)
+            deposited += clock() - t
+            return out
         eps_p = np.clip(grid_map.gather(eps), cfg.minimum_voidage, 1.0)
         velocity = np.zeros_like(p.velocity) if self.fixed else p.velocity
         slip = grid_map.gather(s.flux_velocity()) - velocity
@@ -163,17 +175,19 @@ class CouplingBridge:
             if explicit_drag is not None:
                 beta, exchanged = np.zeros(mesh.cell_count), -explicit_drag
             elif self.fixed:
-                beta, exchanged = grid_map.scatter(c) / mesh.cell_volumes, np.zeros_like(slip)
+                beta, exchanged = scatter(c) / mesh.cell_volumes, np.zeros_like(slip)
             else:
                 one_minus_r, k = particle_response(p.mass, c, dem.dt, self.substeps)
                 accel = (p.contact_force + p.external_force) / p.mass[:, None] + dem.gravity
                 coefficient = p.mass * one_minus_r / dt
-                beta = grid_map.scatter(coefficient) / mesh.cell_volumes
+                beta = scatter(coefficient) / mesh.cell_volumes
                 exchanged = coefficient[:, None] * velocity - (p.mass * k)[:, None] * accel
             if lift is not None:
                 exchanged = exchanged - lift
-            gas.set_exchange(beta, grid_map.scatter(exchanged) / volume_cells)
+            gas.set_exchange(beta, scatter(exchanged) / volume_cells)
+        t_gas = clock()
         gas.step()
+        t_after_gas = clock()
         fluid_velocity = grid_map.gather(s.flux_velocity())
         external = np.zeros_like(slip)
         volume = self.particle_volume()[:, None]
@@ -198,7 +212,9 @@ class CouplingBridge:
             p.fluid_velocity[:] = fluid_velocity
             p.drag_impulse[:] = 0.0
             ids_before = p.ids.copy()
+            t_dem = clock()
             dem.step(self.substeps)
+            t_after_gas += clock() - t_dem  # the DEM times itself
             p = dem.particles
             # explicit: the held force is what both sides exchanged; semi-implicit: what the kicks applied
             impulse = None if explicit_drag is not None else _in_order(p.drag_impulse, p.ids, ids_before)
@@ -208,12 +224,17 @@ class CouplingBridge:
             # the drag impulse the kicks applied (with the flux velocity): return the difference
             lost = (gas.exchange_beta[:, None] * s.velocity - gas.exchange_source) * volume_cells * dt
             if lift is not None:
-                lost -= grid_map.scatter(lift) * dt  # the lift is explicit on both sides: not in the balance
-            difference = lost - grid_map.scatter(impulse)
+                lost -= scatter(lift) * dt  # the lift is explicit on both sides: not in the balance
+            difference = lost - scatter(impulse)
             gas.returned_momentum += difference  # a source of the next gas step
             returned = float(np.abs(difference.sum(axis=0)).max())
         drag_force = explicit_drag.sum(axis=0) if impulse is None else impulse.sum(axis=0) / dt
         self.last.update(drag_force=drag_force, pressure_force=pressure_force, momentum_returned=returned)
+        # closures: before the gas step and after it (interpolation, forces, exchange), less what
+        # the deposition and the DEM took
+        timings.add("voidage_mapping", t_mapped - t_start)
+        timings.add("closures", (t_gas - t_mapped) + (clock() - t_after_gas) - deposited)
+        timings.add("deposition", deposited)
 
     def _check_explicit_stability(self, c, mass) -> None:
         """Explicit drag held over the CFD step diverges once ``dt > 2 m / c`` (forward Euler)."""

@@ -13,8 +13,11 @@ implicitly.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from time import perf_counter
 
 import numpy as np
+
+from ..timing import Timings
 
 from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
 from .forces import gather_forces, pair_forces
@@ -77,6 +80,7 @@ class DEMSystem:
         self.box = box
         self.contact = contact
         self.dt = float(dt)
+        self.timings = Timings()  # the run's (a Model shares one over DEM, gas and bridge)
         if particles.count:
             tc = contact.collision_time(float(particles.mass.min()))
             if self.dt > 0.5 * tc:
@@ -145,20 +149,32 @@ class DEMSystem:
 
     def step(self, steps: int = 1) -> None:
         """Advance ``steps`` DEM time steps."""
-        p = self.particles
+        integration = neighbours = forces = 0.0
         for _ in range(steps):
+            p = self.particles
+            t0 = perf_counter()
             kick_drift(p.position, p.velocity, p.angular_momentum, p.angular_velocity, p.quaternion, p.axis,
                        p.half_length, p.mass, p.inertia, p.contact_force, p.contact_torque, p.external_force,
                        p.external_torque, self.gravity, self.dt, self.reference_position, self.reference_axis,
                        self.displacement, self.track_orientation, p.drag_coefficient, p.fluid_velocity,
                        p.drag_impulse, self.implicit_drag)
+            t1 = perf_counter()
             if self.displacement.max() > 0.5 * self.skin:
                 self.rebuild()
+                p = self.particles
+            t2 = perf_counter()
             self.compute_forces()
+            t3 = perf_counter()
             kick(p.velocity, p.angular_momentum, p.angular_velocity, p.axis, p.half_length, p.mass, p.inertia,
                  p.contact_force, p.contact_torque, p.external_force, p.external_torque, self.gravity, self.dt,
                  self.track_orientation, p.drag_coefficient, p.fluid_velocity, p.drag_impulse, self.implicit_drag)
             self.step_count += 1
+            integration += (t1 - t0) + (perf_counter() - t3)
+            neighbours += t2 - t1
+            forces += t3 - t2
+        self.timings.add("integration", integration)
+        self.timings.add("neighbour_list", neighbours)
+        self.timings.add("contact_forces", forces)
 
     def compute_forces(self) -> None:
         p = self.particles

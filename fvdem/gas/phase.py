@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import warnings
+from time import perf_counter
 
 import numpy as np
 
@@ -72,7 +73,21 @@ class GasPhase:
         self.solver.beta[self.zone] += (1.0 - z.voidage) * ergun_beta_per_solids(
             z.voidage, speed, z.particle_diameter, self.config.density, self.config.viscosity)
 
+    @property
+    def timings(self):
+        return self.solver.timings
+
     def step(self) -> dict:
+        t0 = perf_counter()
+        inner = self.solver.timings.seconds["gas_momentum"] + self.solver.timings.seconds["gas_pressure"]
+        try:
+            return self._step()
+        finally:
+            seconds = self.solver.timings.seconds
+            self.solver.timings.add("gas_other", perf_counter() - t0 - (seconds["gas_momentum"] + seconds["gas_pressure"]
+                                                                         - inner))
+
+    def _step(self) -> dict:
         s = self.solver
         s.beta[:] = self.exchange_beta
         self._update_porous_zone()

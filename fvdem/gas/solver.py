@@ -33,12 +33,14 @@ has none; its pressure is fixed to zero mean (a body force drives the flow, thro
 from __future__ import annotations
 
 from dataclasses import dataclass
+from time import perf_counter
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .mesh import GasMesh, fipy_momentum_system, fipy_pressure_system
+from ..timing import Timings
 from .operators import DiffusionOperator, UpwindConvectionOperator, diagonal
 
 
@@ -73,6 +75,7 @@ class GasSolver:
                  relax_pressure: float = 0.3, tolerance: float = 1e-8, max_iterations: int = 200,
                  assembly: str = "cached", scheme: str = "simple", correctors: int = 2,
                  linear_solver: str = "direct", linear_tolerance: float = 1e-10):
+        self.timings = Timings()  # momentum and pressure phases (a Model shares one)
         self.mesh = mesh
         self.gas = gas
         self.gravity = np.asarray(gravity, float)
@@ -446,19 +449,27 @@ class GasSolver:
         self.face_flux[self._inlet] = self._inlet_flux
         self._steps_since_factor += 1
         if self.scheme == "piso":
+            t0 = perf_counter()
             a_p, grad_p = self._predict_momentum(dt, u_old, gamma, inlet_value, 1.0)
+            t1 = perf_counter()
             residuals = []
             for _ in range(self.correctors):
                 residuals.append(self._correct_pressure(dt, a_p, grad_p, 1.0, old))
                 grad_p = self._face_gradient
+            self.timings.add("gas_momentum", t1 - t0)
+            self.timings.add("gas_pressure", perf_counter() - t1)
             self.iterations = 1
             return {"iterations": 1, "continuity_residual": residuals[-1], "first_residual": residuals[0],
                     "direct_fallbacks": self.direct_fallbacks, "factorizations": self.factorizations}
         residual = change = np.inf
         for iteration in range(1, self.max_iterations + 1):
             previous = self.velocity.copy()
+            t0 = perf_counter()
             a_p, grad_p = self._predict_momentum(dt, u_old, gamma, inlet_value, self.relax_velocity)
+            t1 = perf_counter()
             residual = self._correct_pressure(dt, a_p, grad_p, self.relax_pressure, old)
+            self.timings.add("gas_momentum", t1 - t0)
+            self.timings.add("gas_pressure", perf_counter() - t1)
             change = np.abs(self.velocity - previous).max() / max(np.abs(self.velocity).max(), 1e-30)
             if residual < self.tolerance and change < self.tolerance:
                 break
