@@ -34,7 +34,7 @@ import numpy as np
 FRACTIONS = (0.1, 0.2, 0.29, 0.4, 0.48)
 
 
-def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1):
+def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1, drag=None):
     d_over_length = 1.0 if sphere else aspect_ratio + 1.0 / 3.0  # particle length in d
     reach = d_over_length + 0.1
     side = max(9, math.ceil(3.0 * reach + 1e-9))
@@ -48,9 +48,12 @@ def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1):
         suspension["galileo"] = ga
     else:
         suspension["galileo_equivalent"] = ga_e
-    return {"name": f"hindered_{phi:g}", "suspension": suspension,
-            "particles": {"insertion": {"seed": seed}},
-            "output": {"progress": False, "vtk": False, "timeseries_interval": "2 ms"}}
+    table = {"name": f"hindered_{phi:g}", "suspension": suspension,
+             "particles": {"insertion": {"seed": seed}},
+             "output": {"progress": False, "vtk": False, "timeseries_interval": "2 ms"}}
+    if drag is not None:
+        table["coupling"] = {"drag": drag}
+    return table
 
 
 def run_one(table, threads):
@@ -101,6 +104,9 @@ def main(argv=None):
     parser.add_argument("--duration", type=float, default=20.0, help="viscous times d^2/nu per run")
     parser.add_argument("--jobs", type=int, default=2, help="runs in parallel (each on one thread)")
     parser.add_argument("--quick", action="store_true", help="three fractions, 6 viscous times (a smoke run)")
+    from fvdem.coupling.closures import law_names
+    parser.add_argument("--drag", choices=tuple(n for n in law_names("drag") if n != "none"),
+                        help="drag closure (fvdem laws drag; default: the case's, Hoelzer-Sommerfeld + Di Felice)")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
@@ -114,7 +120,8 @@ def main(argv=None):
     if args.quick:
         args.fractions, args.duration = [0.1, 0.29, 0.48], 6.0
     wall0 = time.perf_counter()
-    tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration) for phi in args.fractions]
+    tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration, drag=args.drag)
+              for phi in args.fractions]
     with ProcessPoolExecutor(max_workers=max(1, args.jobs), mp_context=get_context("spawn")) as pool:
         results = list(pool.map(run_one, tables, [1] * len(tables)))
     for phi, r in zip(args.fractions, results):
@@ -125,14 +132,17 @@ def main(argv=None):
     from fvdem.analysis.suspension import richardson_zaki_exponent, richardson_zaki_fit
     phis = [r["solids_fraction"] for r in results]
     fit = richardson_zaki_fit(phis, [r["slip_reynolds"] for r in results])
-    re_terminal = terminal_reynolds(scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, 0.1, args.duration))
+    re_terminal = terminal_reynolds(scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, 0.1, args.duration,
+                                          drag=args.drag))
     tag = ("sphere" if args.sphere else f"ar{args.aspect_ratio:g}") + (f"_ga{args.ga:g}" if args.ga else f"_gae{args.ga_e:g}")
+    if args.drag:
+        tag += f"_{args.drag}"
     out = Path(args.out)
     plots = _plots(out, tag, results, fit)
     result = {
         "shape": "sphere" if args.sphere else "cylinder (equal-volume spherocylinder)",
         "aspect_ratio": None if args.sphere else args.aspect_ratio,
-        "galileo": args.ga, "galileo_equivalent": args.ga_e,
+        "galileo": args.ga, "galileo_equivalent": args.ga_e, "drag": tables[0].get("coupling", {}).get("drag", "case"),
         "re_by_phi": {f"{phi:g}": r["slip_reynolds"] for phi, r in zip(args.fractions, results)},
         "re_standard_error_by_phi": {f"{phi:g}": r["slip_reynolds_standard_error"] for phi, r in zip(args.fractions, results)},
         "re_inf": fit["re_inf"], "n_exponent": fit["n_exponent"], "fit_r2": fit["r2"],

@@ -33,9 +33,9 @@ import numpy as np
 
 import fvdem
 from fvdem.scenes.observables import weight_per_area
-from fvdem.analysis.bed import bed_top, core_particles, core_solids_fraction, uniform_bed_umf
+from fvdem.analysis.bed import bed_packing, uniform_bed_umf
 from fvdem.case import case_from_dict
-from fvdem.coupling.closures import spherocylinder_shape, sphericities
+from fvdem.coupling.closures import law_names, spherocylinder_shape, sphericities
 
 RHO, MU, G = 1.2, 1.568e-5, 9.81
 EXPERIMENT = {"sphere": 1.58, "spherocylinder": 1.7}
@@ -53,8 +53,9 @@ def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings=
     """Case table of the reduced bed (also tools/speed_accuracy.py's): seed 000's particles (AR-1, or AR-4
     with SP or MP closures) in a ``width`` square column of 15 mm cells at 2 Umf,experiment, inserted
     below 0.2 m (higher when more particles than 2,000 per 0.06 x 0.06 m need the room); the column is
-    0.45 m tall, or the insertion height + 0.3 m for deeper beds. ``drag = "gidaspow"`` replaces the
-    paper's drag closure by Gidaspow's (Ergun / Wen-Yu), keeping lift and torque."""
+    0.45 m tall, or the insertion height + 0.3 m for deeper beds. ``drag`` other than ``"paper"`` (a
+    registered name, e.g. ``"gidaspow"`` or ``"tenneti"``) replaces the paper's drag closure, keeping
+    lift and torque."""
     cells = max(1, round(width / 0.015))
     height = 0.2 * max(1.0, (0.06 / width) ** 2 * particles / 2000)
     column = max(0.45, 0.015 * np.ceil((height + 0.3) / 0.015))
@@ -149,9 +150,10 @@ def main(argv=None):
                         "scale --particles with the cross-section to keep the bed height")
     parser.add_argument("--settings", choices=tuple(SETTINGS), default="paper",
                         help="contact stiffness, DEM and CFD steps: seed 000's or fvdem's defaults")
-    parser.add_argument("--drag", choices=("paper", "gidaspow"), default="paper",
-                        help="drag closure: seed 000's (Hoelzer-Sommerfeld + Di Felice, or Sanjeevi-Padding for "
-                             "--closures mp) or Gidaspow's (Ergun / Wen-Yu) for comparison")
+    parser.add_argument("--drag", choices=("paper",) + tuple(n for n in law_names("drag") if n != "none"),
+                        default="paper", help="drag closure: seed 000's (Hoelzer-Sommerfeld + Di Felice, or "
+                        "Sanjeevi-Padding for --closures mp) or any registered law (fvdem laws drag), lift and "
+                        "torque kept")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
@@ -221,18 +223,9 @@ def main(argv=None):
 
 
 def packed_state(sim):
-    """The defluidized bed at the end of the ramp: solids fraction of its core (bottom and top fifth
-    left out, wall regions kept: the gas sees the whole cross-section), the bed top [m], the core
-    particles' axes and their mean sin^2 of the angle from the vertical (the flow direction)."""
-    p = sim.particles
+    """The defluidized bed at the end of the ramp (``fvdem.analysis.bed.bed_packing``)."""
     box = sim.case.domain
-    args = (p.position, p.axis, p.radius, p.half_length)
-    top = bed_top(*args)
-    fraction = core_solids_fraction(*args, box.lower, box.upper, box.periodic, top=top, wall_margin=0.0)
-    core, _ = core_particles(*args, box.lower, box.upper, box.periodic, top=top, wall_margin=0.0)
-    axes = p.axis[core]
-    return {"solids_fraction": fraction, "bed_top": top, "axes": axes,
-            "sin2": None if np.all(p.half_length == 0) else float(1.0 - np.mean(axes[:, 2] ** 2))}
+    return bed_packing(sim.particles, box.lower, box.upper, box.periodic)
 
 
 def _combined_plot(path, outputs):

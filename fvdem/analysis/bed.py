@@ -54,6 +54,19 @@ def core_particles(position, axis, radius, half_length, lower, upper, periodic, 
     return np.all((position >= lo) & (position < hi), axis=1), float(np.prod(hi - lo))
 
 
+def bed_packing(particles, lower, upper, periodic) -> dict:
+    """What a gas flowing up through a packed bed sees of it: the solids fraction of its core (bottom
+    and top fifth left out, wall regions kept: the gas crosses the whole section), the bed top [m],
+    the core particles' axes and their mean sin^2 of the angle from the vertical (None for spheres)."""
+    args = (particles.position, particles.axis, particles.radius, particles.half_length)
+    top = bed_top(*args)
+    fraction = core_solids_fraction(*args, lower, upper, periodic, top=top, wall_margin=0.0)
+    core, _ = core_particles(*args, lower, upper, periodic, top=top, wall_margin=0.0)
+    axes = particles.axis[core]
+    return {"solids_fraction": fraction, "bed_top": top, "axes": axes,
+            "sin2": None if np.all(particles.half_length == 0) else float(1.0 - np.mean(axes[:, 2] ** 2))}
+
+
 def packed_bed_summary(particles, box) -> dict:
     """Bed top, core solids fraction and the equivalent packed height (solid volume / (area * fraction))."""
     args = (particles.position, particles.axis, particles.radius, particles.half_length)

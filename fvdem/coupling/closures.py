@@ -384,16 +384,27 @@ class Law:
     validity: str
     reference: str
     summary: str
+    re_range: tuple | None = None  # (low, high) superficial Re it was fitted on, where stated
+    solids_range: tuple | None = None  # (low, high) solids fraction
+
+    def outside(self, reynolds: float, solids: float) -> list:
+        """What of (Re, solids fraction) lies outside the fitted ranges, in words (empty: inside)."""
+        out = []
+        for quantity, value, bounds in (("Re", reynolds, self.re_range), ("solids fraction", solids, self.solids_range)):
+            if bounds is not None and not bounds[0] <= value <= bounds[1]:
+                out.append(f"{quantity} {value:.3g} outside {bounds[0]:g}-{bounds[1]:g}")
+        return out
 
 
 LAWS: dict[str, dict[str, Law]] = {"drag": {}, "lift": {}, "torque": {}}
 
 
 def register(kind, name, *, shapes=("sphere", "spherocylinder"), aspect_ratio=None, validity="", reference="",
-             summary=""):
+             summary="", re_range=None, solids_range=None):
     """Decorator: register ``function`` as the ``kind`` law ``name``."""
     def decorate(function):
-        LAWS[kind][name] = Law(kind, name, function, tuple(shapes), aspect_ratio, validity, reference, summary)
+        LAWS[kind][name] = Law(kind, name, function, tuple(shapes), aspect_ratio, validity, reference, summary,
+                               re_range, solids_range)
         return function
     return decorate
 
@@ -474,15 +485,17 @@ def tang_normalised(solids, reynolds):
     return low + re * (0.11 * phi * (1.0 + phi) - 0.00456 / eps ** 4 + (0.169 * eps + 0.0644 / eps ** 4) * re ** -0.343)
 
 
-def _dense(name, normalised, re_range, solids_range):
+def _dense(name, normalised):
     """The registered form of a dense-suspension law: the sphere law on the volume-equivalent
     diameter, times ``non_spherical_factor`` for spherocylinders, warning once outside its range."""
     def evaluate(particle, slip, voidage, axis):
         d_p = particle.equivalent_diameter
         c = dense_drag_coefficient(normalised, slip, voidage, d_p, particle.density, particle.viscosity)
         speed = np.linalg.norm(np.atleast_2d(slip), axis=1)
+        registered = LAWS["drag"][name]
         warn_outside_range(name, slip_reynolds(speed, voidage, d_p, particle.density, particle.viscosity),
-                           1.0 - np.broadcast_to(np.asarray(voidage, float), speed.shape), re_range, solids_range)
+                           1.0 - np.broadcast_to(np.asarray(voidage, float), speed.shape), registered.re_range,
+                           registered.solids_range)
         return c if particle.is_sphere else c * non_spherical_factor(particle, slip, voidage, axis)
     return evaluate
 
@@ -491,22 +504,24 @@ register("drag", "beetstra", validity="solids fraction 0.1-0.6, Re 0-1000 (super
          "times the isolated Hoelzer-Sommerfeld shape ratio",
          reference="Beetstra, van der Hoef & Kuipers (2007), AIChE J. 53, 489-501, Eq. 15",
          summary="Beetstra-van der Hoef-Kuipers 2007 (lattice-Boltzmann random sphere arrays; rods by the "
-                 "isolated shape ratio)")(_dense("beetstra", beetstra_normalised, (0.0, 1000.0), (0.1, 0.6)))
+                 "isolated shape ratio)", re_range=(0.0, 1000.0), solids_range=(0.1, 0.6))(
+             _dense("beetstra", beetstra_normalised))
 
 
 register("drag", "tenneti", validity="solids fraction 0.1-0.5, Re 0.01-300 (superficial); spherocylinders: "
          "times the isolated Hoelzer-Sommerfeld shape ratio",
          reference="Tenneti, Garg & Subramaniam (2011), Int. J. Multiph. Flow 37, 1072-1092, Eqs. 9-12",
          summary="Tenneti-Garg-Subramaniam 2011 (immersed-boundary DNS of random sphere arrays; Schiller-Naumann "
-                 "when dilute; rods by the isolated shape ratio)")(_dense("tenneti", tenneti_normalised, (0.0, 300.0),
-                                                                            (0.0, 0.5)))
+                 "when dilute; rods by the isolated shape ratio)", re_range=(0.0, 300.0), solids_range=(0.0, 0.5))(
+             _dense("tenneti", tenneti_normalised))
 
 
 register("drag", "tang", validity="solids fraction 0.1-0.6, Re 50-1000 (superficial); below Re 50 Beetstra's "
          "creeping-flow terms; spherocylinders: times the isolated Hoelzer-Sommerfeld shape ratio",
          reference="Tang, Peters, Kuipers, Kriebitzsch & van der Hoef (2015), AIChE J. 61, 688-698, Eq. 20",
          summary="Tang et al. 2015 (immersed-boundary DNS of random sphere arrays, Re 50-1000; rods by the "
-                 "isolated shape ratio)")(_dense("tang", tang_normalised, (0.0, 1000.0), (0.1, 0.6)))
+                 "isolated shape ratio)", re_range=(0.0, 1000.0), solids_range=(0.1, 0.6))(
+             _dense("tang", tang_normalised))
 
 
 @register("drag", "none", summary="no drag")
