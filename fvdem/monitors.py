@@ -6,6 +6,7 @@ struggling gas step), the gas watch stops the run with ``SimulationError`` namin
 from __future__ import annotations
 
 import warnings
+from collections import deque
 
 import numpy as np
 
@@ -27,28 +28,35 @@ def particle_speeds(model) -> tuple[float, float]:
 class RunawayWatch:
     """``cost(steps, seconds)`` after each chunk of loop steps; ``gas(gas_max_speed)`` at each sample."""
 
+    RECENT = 200  # chunks the typical cost is the median of
+
     def __init__(self, model):
         self.model = model
-        self.reference = None  # (seconds per step, neighbour rebuilds, step) from the second chunk
+        self.recent = deque(maxlen=self.RECENT)  # (seconds per step, neighbour rebuilds, step) per chunk
         self.chunks = 0
         self.warned = False
 
     def cost(self, steps: int, seconds: float) -> None:
-        """Warn once when the wall time per step grows past ``RUNAWAY_COST`` times the run's first
-        measured rate (the first chunk holds numba's compilation and is skipped)."""
+        """Warn once when a chunk's wall time per step exceeds ``RUNAWAY_COST`` times the median of the
+        recent chunks (a jump, not the gradual rise of a bed being poured or fluidized; the first chunk
+        holds numba's compilation and is skipped)."""
         if steps <= 0 or seconds <= 0:
             return
         model, rate = self.model, seconds / steps
         rebuilds = model.dem.rebuild_count if model.dem is not None else 0
-        if self.reference is None:
-            self.chunks += 1
-            if self.chunks > 1:
-                self.reference = (rate, rebuilds, model.step_count)
+        self.chunks += 1
+        if self.chunks == 1:
             return
-        if self.warned or rate < RUNAWAY_COST * self.reference[0]:
-            return
-        self.warned = True
-        ref_rate, ref_rebuilds, ref_step = self.reference
+        if not self.warned and len(self.recent) >= 3:
+            typical = sorted(self.recent)[len(self.recent) // 2]
+            if rate >= RUNAWAY_COST * typical[0]:
+                self.warned = True
+                self._warn(rate, typical, rebuilds)
+        self.recent.append((rate, rebuilds, model.step_count))
+
+    def _warn(self, rate, typical, rebuilds) -> None:
+        model = self.model
+        ref_rate, ref_rebuilds, ref_step = typical
         gas = ""
         if model.gas is not None:
             speed = float(np.linalg.norm(model.gas.solver.velocity, axis=1).max())
@@ -58,10 +66,10 @@ class RunawayWatch:
             speed, overlap = particle_speeds(model)
             particles = (f"; particles: largest speed {speed:.3g} m/s, largest overlap {overlap:.3g} d, "
                          f"{rebuilds - ref_rebuilds} neighbour-list rebuilds in {model.step_count - ref_step} steps")
-        warnings.warn(f"t = {model.time:.4g} s: a step costs {rate / ref_rate:.0f} x what it cost at the start "
+        warnings.warn(f"t = {model.time:.4g} s: a step costs {rate / ref_rate:.0f} x the run's recent typical step "
                       f"({rate * 1e3:.3g} ms against {ref_rate * 1e3:.3g} ms){particles}{gas}. If the bed has gone "
                       "violent, reduce time.dem_step and gas.cfd_step (docs/speed-accuracy.md)",
-                      RuntimeWarning, stacklevel=3)
+                      RuntimeWarning, stacklevel=4)
 
     def gas(self, gas_max_speed: float) -> None:
         """Stop a walled column whose gas runs far faster than anything drives it: the inlet's
