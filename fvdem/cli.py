@@ -32,13 +32,39 @@ def cmd_check(args) -> int:
     return 0
 
 
+class _StoppedBeforeStart(Exception):
+    pass
+
+
 def cmd_run(args) -> int:
+    import signal
     from .simulation import Simulation
-    case = load_case(args.case, _overrides(args.set))
-    out = Path(args.out) if args.out else Path("runs") / case.name
-    sim = Simulation(case, out, overwrite=args.overwrite, resume=args.resume,
-                     progress=False if args.no_progress else None, threads=args.threads)
-    summary = sim.run()
+    # Ctrl-C or SIGTERM while the run is being set up (imports, numba's cache, the initial state) stops
+    # it cleanly too; once it runs, Simulation.run's own handlers stop it at a checkpoint
+    running = []
+
+    def stop(*_):
+        if running:  # between Simulation.run's own handlers: ask for a stop at the next checkpoint
+            running[0].request_stop()
+        else:
+            raise _StoppedBeforeStart
+
+    previous = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        case = load_case(args.case, _overrides(args.set))
+        out = Path(args.out) if args.out else Path("runs") / case.name
+        sim = Simulation(case, out, overwrite=args.overwrite, resume=args.resume,
+                         progress=False if args.no_progress else None, threads=args.threads)
+        running.append(sim)
+        summary = sim.run()
+    except _StoppedBeforeStart:
+        print("stopped before the run started; nothing to resume from beyond the folder's last checkpoint "
+              "(if any): start again with the same command (add --overwrite if the folder has no checkpoint)",
+              file=sys.stderr)
+        return 130
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     if sim.stopped_early:
         print(f"stopped at t = {sim.time:.6g} s; continue with: fvdem run {args.case} --out {out} --resume",
               file=sys.stderr)
