@@ -73,6 +73,8 @@ def input_script(case, dem, data: str, steps: int, warmup: int) -> str:
 atom_style granular
 atom_modify map array
 boundary f f f
+# the bed fills the bottom fifth of the column: split the ranks across its section, not its height
+processors * * 1
 newton off
 communicate single vel yes
 units si
