@@ -14,6 +14,11 @@ from .dem.system import SimulationError
 
 # a step costing this many times the run's first measured rate is warned about (once)
 RUNAWAY_COST = 20.0
+# overlaps beyond this fraction of the diameter compress a bed past the 5 % height budget the soft
+# defaults were chosen within (docs/speed-accuracy.md); warned once
+OVERLAP_WARNING = 0.05
+# a share of the particles above this touching the outlet (the roof) is warned once: a plug start
+OUTLET_PILE_SHARE = 0.01
 # a walled column's gas faster than this many times the speed its inlet (in the densest packing) or
 # its particles drive is stopped: the 10x-continuity defect of issue 14 reached 20-50x
 RUNAWAY_GAS_SPEED = 10.0
@@ -35,6 +40,7 @@ class RunawayWatch:
         self.recent = deque(maxlen=self.RECENT)  # (seconds per step, neighbour rebuilds, step) per chunk
         self.chunks = 0
         self.warned = False
+        self.warned_about: set = set()  # the particle warnings given
 
     def cost(self, steps: int, seconds: float) -> None:
         """Warn once when a chunk's wall time per step exceeds ``RUNAWAY_COST`` times the median of the
@@ -70,6 +76,33 @@ class RunawayWatch:
                       f"({rate * 1e3:.3g} ms against {ref_rate * 1e3:.3g} ms){particles}{gas}. If the bed has gone "
                       "violent, reduce time.dem_step and gas.cfd_step (docs/speed-accuracy.md)",
                       RuntimeWarning, stacklevel=4)
+
+    def particles(self, values: dict) -> None:
+        """Warn once each when overlaps leave the range the defaults were chosen for, and when particles
+        pile against a walled column's outlet (the roof) while gas flows in."""
+        model = self.model
+        if model.dem is None:
+            return
+        overlap = values.get("max_overlap_over_diameter", 0.0)
+        if overlap > OVERLAP_WARNING and "overlap" not in self.warned_about:
+            self.warned_about.add("overlap")
+            warnings.warn(f"t = {model.time:.4g} s: the largest overlap is {100 * overlap:.1f} % of a diameter, above "
+                          f"{100 * OVERLAP_WARNING:.0f} %: contacts this soft compress the bed beyond the 5 % height "
+                          "budget the defaults were chosen within (docs/speed-accuracy.md); raise "
+                          "contact.normal_stiffness (and lower time.dem_step with 1/sqrt(k_n))",
+                          RuntimeWarning, stacklevel=4)
+        gas, box = model.gas, model.dem.box
+        if gas is None or gas.config.inlet_velocity <= 0 or box.periodic[2] or "outlet" in self.warned_about:
+            return
+        p = model.particles
+        top = p.position[:, 2] + p.radius + p.half_length * np.abs(p.axis[:, 2])
+        touching = int(np.count_nonzero(top > box.upper[2] - 0.5 * (p.radius + p.half_length)))
+        if touching > OUTLET_PILE_SHARE * p.count:
+            self.warned_about.add("outlet")
+            warnings.warn(f"t = {model.time:.4g} s: {touching} particles ({100 * touching / p.count:.1f} %) are "
+                          f"against the outlet at z = {box.upper[2]:g} m: the bed rose as a plug into the roof and will "
+                          "stay pinned there (a full-speed start under a packed bed); start with gas.inlet_ramp "
+                          "(e.g. 1 s) or a lower gas.u_over_umf", RuntimeWarning, stacklevel=4)
 
     def gas(self, gas_max_speed: float) -> None:
         """Stop a walled column whose gas runs far faster than anything drives it: the inlet's

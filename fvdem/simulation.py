@@ -171,6 +171,7 @@ class Simulation:
             values = self.diagnostics()
             if "gas_max_speed" in values:
                 self.watch.gas(values["gas_max_speed"])
+            self.watch.particles(values)
             self.scene.record(self.model, values, self.run_state.histories)
             if self.out is not None:
                 self._timeseries.append(values)

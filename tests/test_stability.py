@@ -127,3 +127,57 @@ def test_a_gradual_rise_of_the_cost_is_not_a_runaway():
         warnings.simplefilter("error")
         for k in range(400):
             sim.watch.cost(100, 0.1 * 1.01 ** k)  # x 53 over the run
+
+
+def _small_coupled(**gas):
+    from fvdem.case import case_from_dict
+    return case_from_dict({"particles": {"count": 60, "diameter": "5 mm", "insertion": {"upper": [0.04, 0.04, 0.05]}},
+                           "domain": {"upper": [0.04, 0.04, 0.2]},
+                           "gas": {"enabled": True, "cells": [2, 2, 10], "inlet_velocity": 2.0, **gas},
+                           "time": {"end": 0.05}, "output": {"progress": False}})
+
+
+def test_the_inlet_ramp_rises_linearly_then_holds_and_leaves_the_inlet_alone_after():
+    import fvdem
+    sim = fvdem.Simulation(_small_coupled(inlet_ramp=0.01, cfd_step=1e-3))
+    s = sim.gas.solver
+    assert s.inlet_velocity == 0.0
+    for k in range(1, 15):
+        sim.run(sim.time_step)
+        assert s.inlet_velocity == pytest.approx(2.0 * min(1.0, k * 1e-3 / 0.01), rel=1e-12), k
+        inflow = -s.face_flux[sim.gas.mesh.boundary_faces["z-"]].sum() / (0.04 * 0.04)
+        assert inflow == pytest.approx(s.inlet_velocity, rel=1e-9)
+    s.set_inlet_velocity(1.0)  # a tool's own ramp (tools/validate_umf.py) after the start-up
+    sim.run(sim.time_step)
+    assert s.inlet_velocity == 1.0
+
+
+def test_a_ramped_run_resumes_bit_for_bit(tmp_path):
+    """Stopped inside the ramp (0.011 of 0.02 s) and resumed: the ramp continues where it was."""
+    import dataclasses
+    import numpy as np
+    import fvdem
+    case = _small_coupled(inlet_ramp=0.02)
+    fvdem.Simulation(case, tmp_path / "straight").run()
+    fvdem.Simulation(dataclasses.replace(case, time=dataclasses.replace(case.time, end=0.011)), tmp_path / "split").run()
+    fvdem.Simulation(case, tmp_path / "split", resume=True).run()
+    for name in ("position", "velocity"):
+        a = np.load(tmp_path / "straight" / "final_state.npz")[name]
+        b = np.load(tmp_path / "split" / "final_state.npz")[name]
+        np.testing.assert_array_equal(a, b)
+
+
+def test_large_overlaps_and_particles_against_the_roof_are_warned_once_with_the_setting():
+    import warnings
+    import fvdem
+    sim = fvdem.Simulation(_small_coupled())
+    values = sim.diagnostics()
+    with pytest.warns(RuntimeWarning, match=r"largest overlap is 8.0 % .*raise contact.normal_stiffness"):
+        sim.watch.particles(dict(values, max_overlap_over_diameter=0.08))
+    p = sim.particles
+    p.position[:10, 2] = 0.2 - p.radius[:10]  # ten of sixty pressed against the roof
+    with pytest.warns(RuntimeWarning, match=r"10 particles \(16.7 %\) are against the outlet.*gas.inlet_ramp"):
+        sim.watch.particles(values)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.watch.particles(dict(values, max_overlap_over_diameter=0.09))  # each once only

@@ -50,6 +50,9 @@ class GasPhase:
         # unprojected); part of the gas's momentum until then
         self.returned_momentum = np.zeros((n, 3))
         self._body_force = np.asarray(g.body_force, float)
+        self.inlet_ramp = float(g.inlet_ramp)
+        if self.inlet_ramp > 0.0:
+            self.solver.set_inlet_velocity(0.0)
         self.mean_pressure_gradient = np.asarray(g.mean_pressure_gradient, float)
         self._courant_warned = False
 
@@ -87,8 +90,17 @@ class GasPhase:
             self.solver.timings.add("gas_other", perf_counter() - t0 - (seconds["gas_momentum"] + seconds["gas_pressure"]
                                                                          - inner))
 
+    def inlet_velocity_at(self, time: float) -> float:
+        """The superficial inlet velocity [m/s] at ``time``: ``gas.inlet_velocity``, ramped linearly from 0
+        over ``gas.inlet_ramp``."""
+        if self.inlet_ramp <= 0.0:
+            return self.config.inlet_velocity
+        return self.config.inlet_velocity * min(1.0, time / self.inlet_ramp)
+
     def _step(self) -> dict:
         s = self.solver
+        if self.step_count * self.dt < self.inlet_ramp:  # the velocity at the end of the step (implicit)
+            s.set_inlet_velocity(self.inlet_velocity_at((self.step_count + 1) * self.dt))
         s.beta[:] = self.exchange_beta
         self._update_porous_zone()
         s.source[:] = (self._body_force + s.voidage[:, None] * self.mean_pressure_gradient + self.exchange_source
