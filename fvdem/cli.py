@@ -106,10 +106,17 @@ def cmd_compare(args) -> int:
 def cmd_info(args) -> int:
     import numba
     import numpy
+    from numba import njit, prange
+
+    @njit(parallel=True)
+    def _touch(a):  # a parallel launch decides the threading layer
+        for i in prange(a.shape[0]):
+            a[i] += 1.0
+    _touch(numpy.zeros(2))
     from . import __version__
     print(json.dumps({"fvdem": __version__, "numpy": numpy.__version__, "numba": numba.__version__,
                       "threads_available": numba.config.NUMBA_NUM_THREADS,
-                      "threading_layer": numba.config.THREADING_LAYER}, indent=2))
+                      "threading_layer": numba.threading_layer()}, indent=2))
     return 0
 
 

@@ -28,3 +28,27 @@ def test_a_stopped_run_ends_its_log_with_where_it_stopped():
     bar.close()
     lines = stream.getvalue().splitlines()
     assert [line.split()[1] for line in lines] == ["53%", "54%"]
+
+
+def test_fvdem_prefers_the_openmp_threading_layer_unless_the_user_chose_one():
+    """With libtbb installed numba picks TBB, whose kernel launches made small systems up to 250 x
+    slower; fvdem asks for OpenMP first, and leaves a user's NUMBA_THREADING_LAYER(_PRIORITY) alone."""
+    import os
+    import subprocess
+    import sys
+    code = ("import fvdem, numba, numpy\n"
+            "from numba import njit, prange\n"
+            "@njit(parallel=True)\n"
+            "def f(a):\n"
+            "    for i in prange(a.shape[0]):\n"
+            "        a[i] += 1\n"
+            "f(numpy.zeros(2))\n"
+            "print(numba.config.THREADING_LAYER_PRIORITY[0], numba.threading_layer())\n")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_THREADING_LAYER")}
+    first, used = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                                 timeout=120, check=True).stdout.split()
+    assert first == "omp" and used in ("omp", "tbb", "workqueue")
+    env["NUMBA_THREADING_LAYER"] = "workqueue"
+    _, used = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                             timeout=120, check=True).stdout.split()
+    assert used == "workqueue"
