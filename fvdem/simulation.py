@@ -9,46 +9,18 @@ from __future__ import annotations
 
 import signal
 import time as _time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 
 from .case import Case, to_toml
 from .dem.system import SimulationError
 from .io.checkpoint import load_checkpoint
-from .io.run_folder import (CHECKPOINT, OutputError, check_resumable, prepare_output, upgrade_writer_state,
+from .io.run_folder import (CHECKPOINT, OutputError, RunState, Schedule, check_resumable, prepare_output,
                             write_checkpoint, write_final, write_snapshot)
 from .io.timeseries import TimeseriesWriter
 from .model import Model, build_dem, build_particles, load_initial_state, set_threads
 from .monitors import RunawayWatch
 from .scenes import scene_for
 from .timing import Timings
-
-
-@dataclass
-class _Schedule:
-    every: int  # loop steps
-
-    def due(self, step: int) -> bool:
-        return step % self.every == 0
-
-    def next_after(self, step: int) -> int:
-        return (step // self.every + 1) * self.every
-
-
-@dataclass
-class _RunState:
-    """What the writers carry over a run (saved in checkpoints)."""
-    snapshots: dict = field(default_factory=dict)  # collection -> [(time, file)]
-    histories: dict = field(default_factory=dict)  # observable name -> its history
-    wall_seconds: float = 0.0
-    cpu_seconds: float = 0.0
-    settled: bool = False
-    timings: dict = field(default_factory=dict)  # phase -> seconds (fvdem.timing)
-
-    @classmethod
-    def from_checkpoint(cls, meta: dict, histories: dict) -> "_RunState":
-        """The state saved in a checkpoint; ``histories``: the scene's empty ones, for any it lacks."""
-        meta = upgrade_writer_state(meta)
-        return cls(snapshots=meta.pop("snapshots", {}), histories={**histories, **meta.pop("histories", {})}, **meta)
 
 
 class Simulation:
@@ -72,12 +44,12 @@ class Simulation:
             check_resumable(case, self.out)
         self.scene = scene_for(case)
         arrays, meta = load_checkpoint(self.out / CHECKPOINT) if resume else (None, None)
-        self.run_state = (_RunState(histories=self.scene.new_histories()) if meta is None
-                          else _RunState.from_checkpoint(meta["writers"], self.scene.new_histories()))
+        self.run_state = (RunState(histories=self.scene.new_histories()) if meta is None
+                          else RunState.from_checkpoint(meta["writers"], self.scene.new_histories()))
         self.model = Model(case, arrays, Timings(self.run_state.timings))
         self.watch = RunawayWatch(self.model)
         o, dt = case.output, self.model.time_step
-        self.schedules = {name: _Schedule(max(1, round(interval / dt))) for name, interval in
+        self.schedules = {name: Schedule(max(1, round(interval / dt))) for name, interval in
                           (("timeseries", o.timeseries_interval), ("snapshot", o.snapshot_interval),
                            ("checkpoint", o.checkpoint_interval))}
         self._stop_requested = False

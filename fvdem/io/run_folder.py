@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,36 @@ FINAL_STATE = "final_state.npz"
 # keys a resumed run may change: when it ends, what it writes and how it runs; all else is its physics
 RESUME_SAFE = ("name", "description", "time.end", "time.stop_when_settled", "time.settled_speed", "time.min_time",
                "output.", "run.")
+
+
+@dataclass
+class Schedule:
+    """A writer's schedule: every ``every`` loop steps."""
+
+    every: int  # loop steps
+
+    def due(self, step: int) -> bool:
+        return step % self.every == 0
+
+    def next_after(self, step: int) -> int:
+        return (step // self.every + 1) * self.every
+
+
+@dataclass
+class RunState:
+    """What the writers carry over a run (saved in checkpoints)."""
+    snapshots: dict = field(default_factory=dict)  # collection -> [(time, file)]
+    histories: dict = field(default_factory=dict)  # observable name -> its history
+    wall_seconds: float = 0.0
+    cpu_seconds: float = 0.0
+    settled: bool = False
+    timings: dict = field(default_factory=dict)  # phase -> seconds (fvdem.timing)
+
+    @classmethod
+    def from_checkpoint(cls, meta: dict, histories: dict) -> "RunState":
+        """The state saved in a checkpoint; ``histories``: the scene's empty ones, for any it lacks."""
+        meta = upgrade_writer_state(meta)
+        return cls(snapshots=meta.pop("snapshots", {}), histories={**histories, **meta.pop("histories", {})}, **meta)
 
 
 class OutputError(RuntimeError):
