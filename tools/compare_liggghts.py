@@ -124,9 +124,10 @@ def run_liggghts(executable: str, folder: Path, ranks: int, timeout: float) -> d
             "ns_per_particle_step": 1e9 * seconds / (steps * atoms), "process_wall_seconds": wall}
 
 
-def liggghts_version(executable: str) -> str | None:
-    try:
-        out = subprocess.run([executable, "-h"], capture_output=True, text=True, timeout=30).stdout
+def liggghts_version(executable: str, folder: Path) -> str | None:
+    try:  # in the work folder: LIGGGHTS writes log.liggghts where it starts
+        out = subprocess.run([executable, "-h", "-log", "none"], capture_output=True, text=True, timeout=30,
+                             cwd=folder).stdout
     except (OSError, subprocess.TimeoutExpired):
         return None
     match = re.search(r"LIGGGHTS[^\n]*", out)
@@ -167,7 +168,7 @@ def main(argv=None) -> int:
         for ranks in args.ranks:
             liggghts[f"ranks_{ranks}"] = run_liggghts(executable, folder, ranks, timeout=3600)
             print(f"LIGGGHTS, {ranks} rank(s): {json.dumps(liggghts[f'ranks_{ranks}'])}", file=sys.stderr)
-        liggghts["version"] = liggghts_version(executable)
+        liggghts["version"] = liggghts_version(executable, folder)
         liggghts["folder"] = str(folder)
         result["liggghts"] = liggghts
     from bench_dem import worker
