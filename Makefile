@@ -39,3 +39,5 @@ smoke: $(STAMP)  # the validation tools' quick modes (CI runs them after the tes
 	$(BIN)/python tools/stability_map.py --quick --json --out smoke_out
 	$(BIN)/python tools/speed_accuracy.py --quick --json --out smoke_out
 	$(BIN)/python tools/validate_hindered_settling.py --quick --aspect-ratio 2 --ga-e 1296 --json --out smoke_out
+	rm -rf smoke_out/study
+	$(BIN)/fvdem study studies/smoke.toml --out smoke_out/study --json

@@ -1,4 +1,4 @@
-"""Command line: ``fvdem run | check | report | compare | info | schema | laws``.
+"""Command line: ``fvdem run | check | report | compare | study | info | schema | laws``.
 
 Input problems (case file, options, output folder) exit with code 2 and a message, never a
 traceback; a run that becomes unstable exits with code 3 and the cause.
@@ -103,6 +103,33 @@ def cmd_compare(args) -> int:
     return 0
 
 
+def cmd_study(args) -> int:
+    from .study import load_study, report, run_study
+    target = Path(args.study)
+    if args.report and target.is_dir():
+        if not (target / "study.json").exists():
+            return _fail(f"{target} is not a study folder (no study.json)")
+        for path in report(target):
+            print(path)
+        return 0
+    if not args.out:
+        return _fail("fvdem study STUDY.toml needs --out DIR (or: fvdem study DIR --report)")
+    if args.threads_per_worker < 1:
+        return _fail(f"--threads-per-worker {args.threads_per_worker}: at least 1")
+    study = load_study(target, args.out)
+    log = (lambda line: print(line, file=sys.stderr, flush=True))
+    log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {study.duration:g} s into {args.out}")
+    result = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers,
+                       threads=args.threads_per_worker, log=log)
+    for path in report(args.out):
+        log(f"report: {path}")
+    failed = [r for r in result["runs"] if r["status"] == "failed"]
+    for r in failed:
+        log(f"failed: {r['name']}: {r['error']}")
+    print(json.dumps(result) if args.json else json.dumps(result, indent=1))
+    return 1 if failed else 0
+
+
 def cmd_info(args) -> int:
     import numba
     import numpy
@@ -183,6 +210,15 @@ def make_parser() -> argparse.ArgumentParser:
     compare.add_argument("runs", nargs="+")
     compare.add_argument("--out", default=".", help="folder for mixing_compare.png and t95.png")
     compare.set_defaults(func=cmd_compare)
+    study = sub.add_parser("study", help="run a study file's runs on Dask (or --report a study folder)")
+    study.add_argument("study", help="a study file (studies/*.toml), or a study folder with --report")
+    study.add_argument("--out", help="study folder (runs/, beds/, study.json, the report)")
+    study.add_argument("--workers", type=int, help="LocalCluster worker processes (default: cores / threads)")
+    study.add_argument("--threads-per-worker", type=int, default=1, help="numba threads of each run")
+    study.add_argument("--scheduler", help="address of a running Dask scheduler (instead of a LocalCluster)")
+    study.add_argument("--report", action="store_true", help="only write the report of a study folder")
+    study.add_argument("--json", action="store_true", help="the result as one JSON line")
+    study.set_defaults(func=cmd_study)
     sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)
     schema = sub.add_parser("schema", help="print the case-file reference (Markdown)")
     schema.add_argument("--docs", action="store_true", help="the form of docs/case-reference.md (registries by name)")

@@ -1,0 +1,336 @@
+"""Studies: a sweep of runs over families of cases and axes of settings, run as tasks on Dask.
+
+A study file (TOML) names its families (a base case and its own settings), the settled beds some of
+them start from, the axes to vary, exclusions, the duration and replicas::
+
+    name = "smoke"
+    duration = 0.04                    # simulated seconds of every run (time.end)
+    replicas = 1                       # repeats with other insertion seeds (particles.insertion.seed)
+    [settings]                         # for every run and bed
+    "output.vtk" = false
+    [beds.small]                       # prepared once, before the runs that start from it
+    case = "../cases/bed_ar1.toml"
+    set = {"particles.count" = 300}
+    [families.ar1]
+    case = "../cases/ar1.toml"
+    bed = "small"                      # particles.initial_state = the bed's final state
+    set = {"particles.count" = 300}
+    [axes]
+    "gas.u_over_umf" = [2.0, 2.9]
+    [[exclude]]                        # drop the runs that match every key given
+    family = "ar1"
+    "gas.u_over_umf" = 2.9
+    [cluster]                          # optional: where the tasks run
+    kind = "local"                     # or "slurm", "pbs", "sge", "lsf" (dask-jobqueue), with its options
+    workers = 2
+
+Every run and every bed is one task on Dask distributed: a ``LocalCluster`` sized to the machine by
+default, the ``--scheduler`` of a running cluster, or a dask-jobqueue cluster from ``[cluster]``. A
+run's folder is ``OUT/runs/<name>``, a bed's ``OUT/beds/<name>``. A finished run (its summary
+reached the duration) is skipped, an interrupted one resumed from its checkpoint (also when Dask
+retries a task whose worker died), and a failed one reported with its cause without stopping the
+others. Every case is checked before anything runs.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import os
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .case import CaseError, load_case
+
+STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
+              "cluster"}
+CLUSTER_KINDS = ("local", "slurm", "pbs", "sge", "lsf")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a study: where its case is, what it changes, and where it writes."""
+
+    name: str
+    family: str
+    case: str  # path of the base case file
+    overrides: dict
+    folder: str
+    bed: str | None = None  # name of the bed it starts from
+    point: dict = field(default_factory=dict)  # the axes' values of this run
+
+
+@dataclass(frozen=True)
+class BedSpec:
+    name: str
+    case: str
+    overrides: dict
+    folder: str
+
+
+@dataclass(frozen=True)
+class Study:
+    name: str
+    path: str
+    duration: float
+    beds: tuple
+    runs: tuple
+    cluster: dict
+
+
+def _problem(problems, key, value, allowed):
+    problems.append(f"{key} = {value!r}: {allowed}")
+
+
+def load_study(path, out) -> Study:
+    """Read and check a study file; ``CaseError`` with every problem (key path, value, what is allowed)."""
+    path = Path(path)
+    try:
+        table = tomllib.loads(path.read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CaseError([f"{path}: cannot be read ({exc})"]) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError([f"{path}: not valid TOML ({exc})"]) from None
+    problems: list[str] = []
+    for key in sorted(set(table) - STUDY_KEYS):
+        _problem(problems, key, table[key], f"unknown key; a study has {', '.join(sorted(STUDY_KEYS))}")
+    name = table.get("name", path.stem)
+    duration = table.get("duration")
+    if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not 0 < duration < 1e6:
+        _problem(problems, "duration", duration, "a number of simulated seconds > 0")
+    replicas = table.get("replicas", 1)
+    if not isinstance(replicas, int) or isinstance(replicas, bool) or not 1 <= replicas <= 1000:
+        _problem(problems, "replicas", replicas, "an integer 1-1000")
+        replicas = 1
+    settings = _table(table, "settings", problems)
+    axes = _table(table, "axes", problems)
+    for key, values in axes.items():
+        if not isinstance(values, list) or not values:
+            _problem(problems, f"axes.{key}", values, "a non-empty list of values")
+    families = _table(table, "families", problems)
+    if not families:
+        problems.append("families: a study needs at least one family ([families.NAME] with case = ...)")
+    beds_table = _table(table, "beds", problems)
+    out = Path(out)
+    base = path.parent
+
+    def entry(kind, key, spec):
+        if not isinstance(spec, dict) or "case" not in spec:
+            _problem(problems, f"{kind}.{key}", spec, "a table with case = 'path of a case file'")
+            return None, {}
+        unknown = set(spec) - {"case", "set", "bed"} - ({"bed"} if kind == "families" else set())
+        for k in sorted(unknown):
+            _problem(problems, f"{kind}.{key}.{k}", spec[k], "unknown key; allowed: case, set" +
+                     (", bed" if kind == "families" else ""))
+        case_path = (base / spec["case"]).resolve()
+        if not case_path.is_file():
+            _problem(problems, f"{kind}.{key}.case", spec["case"], f"no such case file ({case_path})")
+        sets = spec.get("set", {})
+        if not isinstance(sets, dict):
+            _problem(problems, f"{kind}.{key}.set", sets, "a table of case keys and values")
+            sets = {}
+        return str(case_path), sets
+
+    beds = []
+    for key, spec in beds_table.items():
+        case_path, sets = entry("beds", key, spec)
+        if case_path:
+            beds.append(BedSpec(key, case_path, {**settings, **sets}, str(out / "beds" / key)))
+    bed_names = {b.name for b in beds}
+    exclusions = table.get("exclude", [])
+    if not isinstance(exclusions, list) or not all(isinstance(e, dict) for e in exclusions):
+        _problem(problems, "exclude", exclusions, "a list of tables ([[exclude]] with family and axis values)")
+        exclusions = []
+    runs = []
+    names = list(axes)
+    for family, spec in families.items():
+        case_path, sets = entry("families", family, spec)
+        if not case_path:
+            continue
+        bed = spec.get("bed")
+        if bed is not None and bed not in bed_names:
+            _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+        for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
+            point = dict(zip(names, values))
+            if any(all((family if k == "family" else point.get(k)) == v for k, v in e.items()) for e in exclusions):
+                continue
+            for replica in range(1, replicas + 1):
+                label = "_".join(f"{k.split('.')[-1]}{v:g}" if isinstance(v, (int, float)) else f"{k.split('.')[-1]}{v}"
+                                 for k, v in point.items())
+                run_name = "_".join(x for x in (family, label, f"r{replica}" if replicas > 1 else "") if x)
+                overrides = {**settings, **sets, **point, "time.end": float(duration or 0)}
+                if replicas > 1:
+                    overrides["particles.insertion.seed"] = replica
+                runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name), bed, point))
+    cluster = _table(table, "cluster", problems)
+    kind = cluster.get("kind", "local")
+    if kind not in CLUSTER_KINDS:
+        _problem(problems, "cluster.kind", kind, f"one of {', '.join(CLUSTER_KINDS)}")
+    # every case is checked before anything runs (a bed's final state does not exist yet: not loaded)
+    for spec in list(beds) + runs:
+        overrides = dict(spec.overrides)
+        try:
+            load_case(spec.case, overrides)
+        except CaseError as exc:
+            problems += [f"{spec.name}: {p}" for p in exc.problems]
+    if problems:
+        raise CaseError(problems)
+    return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster)
+
+
+def _table(table, key, problems):
+    value = table.get(key, {})
+    if not isinstance(value, dict):
+        _problem(problems, key, value, "a table")
+        return {}
+    return value
+
+
+# --------------------------------------------------------------------------- tasks (run on workers)
+def _finished(folder: Path, end: float) -> bool:
+    summary = folder / "summary.json"
+    if not summary.exists():
+        return False
+    try:
+        data = json.loads(summary.read_text())
+    except (OSError, json.JSONDecodeError):
+        return False
+    return not data.get("stopped_early") and (data.get("settled") or data["simulated_time"] >= end * (1 - 1e-9))
+
+
+def _simulate(case_path, overrides, folder, threads) -> dict:
+    """Run (or resume, or skip) one case into ``folder``; returns status and summary."""
+    from .simulation import Simulation
+    folder = Path(folder)
+    case = load_case(case_path, {**overrides, "output.progress": False})
+    if _finished(folder, case.time.end):
+        return {"status": "skipped", "summary": json.loads((folder / "summary.json").read_text())}
+    resume = (folder / "checkpoint.npz").exists()
+    summary = Simulation(case, folder, resume=resume, overwrite=not resume, threads=threads, progress=False).run()
+    return {"status": "resumed" if resume else "finished", "summary": summary}
+
+
+def prepare_bed(bed: BedSpec, threads: int) -> str:
+    """A settled bed's final state (prepared once; the runs starting from it depend on this task)."""
+    _simulate(bed.case, bed.overrides, bed.folder, threads)
+    return str(Path(bed.folder) / "final_state.npz")
+
+
+def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
+    """One run of the study; never raises: a failure comes back with its cause."""
+    started = time.perf_counter()
+    overrides = dict(run.overrides)
+    if bed_state is not None:
+        overrides["particles.initial_state"] = bed_state
+    try:
+        outcome = _simulate(run.case, overrides, run.folder, threads)
+    except Exception as exc:  # noqa: BLE001  (any failure of one run is reported, the others go on)
+        return {"name": run.name, "family": run.family, "status": "failed", "error": f"{type(exc).__name__}: {exc}",
+                "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
+                "wall_seconds": time.perf_counter() - started}
+    summary = outcome["summary"]
+    return {"name": run.name, "family": run.family, "status": outcome["status"], "t95": summary.get("t95"),
+            "folder": run.folder, "simulated_seconds": summary["simulated_time"], "point": run.point,
+            "pressure_drop_over_weight": summary.get("pressure_drop_over_weight"),
+            "wall_seconds": time.perf_counter() - started}
+
+
+# --------------------------------------------------------------------------- the scheduler side
+def make_client(study: Study, scheduler: str | None, workers: int | None, threads: int):
+    """A Dask client: on ``scheduler``, on the study's dask-jobqueue ``[cluster]``, or on a LocalCluster
+    of ``workers`` processes (default: cores / threads)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:  # pragma: no cover - a dependency
+        raise CaseError(["fvdem study needs Dask distributed: pip install 'dask[distributed]'"]) from None
+    if scheduler:
+        return Client(scheduler), scheduler
+    options = {k: v for k, v in study.cluster.items() if k not in ("kind", "workers")}
+    kind = study.cluster.get("kind", "local")
+    count = workers or study.cluster.get("workers") or max(1, (os.cpu_count() or 1) // max(1, threads))
+    if kind == "local":
+        cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=None,
+                               **options)
+        return Client(cluster), f"LocalCluster({count} workers x {threads} numba threads)"
+    try:
+        import dask_jobqueue
+    except ImportError:
+        raise CaseError([f"cluster.kind = {kind!r}: needs dask-jobqueue (pip install dask-jobqueue)"]) from None
+    cluster_class = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster"}[kind]
+    cluster = getattr(dask_jobqueue, cluster_class)(**options)
+    cluster.scale(jobs=count)
+    return Client(cluster), f"{cluster_class}({count} jobs)"
+
+
+def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print) -> dict:
+    """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``)."""
+    from distributed import as_completed
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "study.toml").write_text(Path(study.path).read_text())
+    started = time.perf_counter()
+    client, description = make_client(study, scheduler, workers, threads)
+    try:
+        beds = {b.name: client.submit(prepare_bed, b, threads, key=f"bed-{b.name}", pure=False) for b in study.beds}
+        futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"run-{r.name}",
+                                 pure=False) for r in study.runs]
+        total = len(futures) * study.duration
+        results, done = [], 0.0
+        for future in as_completed(futures):
+            try:
+                result = future.result()
+            except Exception as exc:  # noqa: BLE001  (a bed failed: its runs cannot start)
+                name = future.key.removeprefix("run-") if isinstance(future.key, str) else str(future.key)
+                run = next(r for r in study.runs if r.name == name)
+                result = {"name": name, "family": run.family, "status": "failed", "folder": run.folder, "t95": None,
+                          "error": f"{type(exc).__name__}: {exc}", "simulated_seconds": 0.0, "point": run.point}
+            results.append(result)
+            done += study.duration if result["status"] != "failed" else 0.0
+            elapsed = time.perf_counter() - started
+            eta = elapsed / done * (total - done) if done else math.nan
+            detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None else "t95 -")
+            log(f"[{len(results)}/{len(futures)}] {result['name']}: {result['status']} ({detail}); simulated "
+                f"{done:.4g} of {total:.4g} s, {elapsed:.0f} s wall, ETA {eta:.0f} s" if done else
+                f"[{len(results)}/{len(futures)}] {result['name']}: {result['status']} ({detail})")
+    finally:
+        client.close()
+        cluster = getattr(client, "cluster", None)
+        if cluster is not None:
+            cluster.close()
+    order = {r.name: k for k, r in enumerate(study.runs)}
+    results.sort(key=lambda r: order[r["name"]])
+    summary = {"study": study.name, "scheduler": description, "runs": results,
+               "wall_seconds": time.perf_counter() - started}
+    (out / "study.json").write_text(json.dumps(summary, indent=1) + "\n")
+    return summary
+
+
+def report(out) -> list:
+    """The study's figures and table from its run folders: mixing entropy against time per family
+    (seed 000 Fig. 2), t95 against U/Umf (Fig. 4), and ``table.csv`` / ``table.json``."""
+    from .analysis.plots import plot_mixing, plot_t95
+    out = Path(out)
+    result = json.loads((out / "study.json").read_text())
+    runs = [r for r in result["runs"] if r["status"] != "failed" and (Path(r["folder"]) / "timeseries.csv").exists()]
+    paths = []
+    for family in sorted({r["family"] for r in runs}):
+        paths.append(plot_mixing([Path(r["folder"]) for r in runs if r["family"] == family],
+                                 out / f"mixing_{family}.png"))
+    if runs:
+        paths.append(plot_t95([Path(r["folder"]) for r in runs], out / "t95.png"))
+    rows = []
+    for r in result["runs"]:
+        summary = Path(r["folder"]) / "summary.json"
+        data = json.loads(summary.read_text()) if summary.exists() else {}
+        rows.append({"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"],
+                     "t95": r.get("t95"), "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
+                     "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
+                                                       if "bed_pressure_drop_std_second_half" in data else None),
+                     "bed_height": data.get("bed_height"), "wall_seconds": data.get("wall_seconds")})
+    (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
+    columns = list(dict.fromkeys(k for row in rows for k in row))
+    lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
+    (out / "table.csv").write_text("\n".join(lines) + "\n")
+    return paths + [out / "table.csv", out / "table.json"]

@@ -1,0 +1,122 @@
+"""fvdem study (issue 17): a study file expands into checked runs, runs them as Dask tasks with the
+settled bed prepared once, skips finished runs on a second call, and reports a failed run's cause."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fvdem.case import CaseError
+from fvdem.study import RunSpec, load_study, run_task
+
+ROOT = Path(__file__).resolve().parents[1]
+SMOKE = ROOT / "studies" / "smoke.toml"
+
+
+def test_the_study_files_expand_into_checked_runs(tmp_path):
+    smoke = load_study(SMOKE, tmp_path)
+    assert [r.name for r in smoke.runs] == ["ar1_u_over_umf2", "ar1_u_over_umf2.9"]
+    assert [b.name for b in smoke.beds] == ["small"] and all(r.bed == "small" for r in smoke.runs)
+    assert smoke.runs[1].overrides["gas.u_over_umf"] == 2.9 and smoke.runs[1].overrides["time.end"] == 0.02
+
+
+def test_a_wrong_study_is_refused_with_every_key_path_before_anything_runs(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(f'''name = "bad"
+duration = -1
+colour = "red"
+[families.a]
+case = "{ROOT / 'cases' / 'demo.toml'}"
+bed = "nowhere"
+[families.a.set]
+"particles.count" = -5
+[axes]
+"gas.u_over_umf" = [2.0]
+''')
+    with pytest.raises(CaseError) as failure:
+        load_study(path, tmp_path / "out")
+    text = "\n".join(failure.value.problems)
+    assert "duration = -1" in text and "colour = 'red': unknown key" in text
+    assert "families.a.bed = 'nowhere'" in text and "a_u_over_umf2: particles.count = -5" in text
+    result = subprocess.run([sys.executable, "-m", "fvdem", "study", str(path), "--out", str(tmp_path / "o")],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "Traceback" not in result.stderr and not (tmp_path / "o").exists()
+
+
+def test_a_failing_run_comes_back_with_its_cause():
+    run = RunSpec("broken", "ar1", str(ROOT / "cases" / "ar1.toml"), {"time.end": 0.01}, "/nonexistent/run")
+    result = run_task(run, 1, bed_state="/nonexistent/final_state.npz")
+    assert result["status"] == "failed" and "does not exist" in result["error"]
+
+
+@pytest.mark.slow
+def test_the_smoke_study_runs_on_a_local_cluster_and_a_second_call_starts_nothing(tmp_path):
+    out = tmp_path / "study"
+    command = [sys.executable, "-m", "fvdem", "study", str(SMOKE), "--out", str(out), "--workers", "2", "--json"]
+    first = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert first.returncode == 0, first.stderr
+    result = json.loads(first.stdout.strip().splitlines()[-1])
+    assert result["study"] == "smoke" and result["scheduler"].startswith("LocalCluster(2 workers")
+    assert [r["status"] for r in result["runs"]] == ["finished", "finished"]
+    assert all((Path(r["folder"]) / "summary.json").exists() for r in result["runs"])
+    # both runs started from the one settled bed
+    for r in result["runs"]:
+        assert (out / "beds" / "small" / "final_state.npz").as_posix() in (Path(r["folder"]) / "case.toml").read_text()
+    assert (out / "t95.png").exists() and (out / "table.csv").exists()
+    second = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert [r["status"] for r in json.loads(second.stdout.strip().splitlines()[-1])["runs"]] == ["skipped", "skipped"]
+
+
+@pytest.mark.slow
+def test_a_worker_killed_mid_run_is_replaced_and_the_run_resumes_from_its_checkpoint(tmp_path):
+    """SIGKILL the worker process while its run is past a checkpoint: Dask gives the task to a new
+    worker, the run resumes from the checkpoint and ends bit-for-bit where an uninterrupted run does."""
+    import signal
+    import time
+
+    import numpy as np
+    import psutil
+    study = tmp_path / "kill.toml"
+    study.write_text(f'''name = "kill"
+duration = 0.3
+[settings]
+"output.vtk" = false
+"output.checkpoint_interval" = 0.02
+"output.timeseries_interval" = 0.005
+[families.small]
+case = "{ROOT / 'cases' / 'demo.toml'}"
+[families.small.set]
+"particles.count" = 150
+[axes]
+"gas.u_over_umf" = [2.0]
+''')
+    out = tmp_path / "study"
+    command = [sys.executable, "-m", "fvdem", "study", str(study), "--out", str(out), "--workers", "1", "--json"]
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    checkpoint = out / "runs" / "small_u_over_umf2" / "checkpoint.npz"
+    deadline = time.time() + 300
+    while not checkpoint.exists() and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.2)
+    assert checkpoint.exists(), "the run never wrote a checkpoint"
+    workers = [p for p in psutil.Process(proc.pid).children(recursive=True)
+               if "spawn_main" in " ".join(p.cmdline()) and "resource_tracker" not in " ".join(p.cmdline())]
+    assert workers, "no worker process found"
+    for worker in workers:
+        worker.send_signal(signal.SIGKILL)
+    stdout, stderr = proc.communicate(timeout=600)
+    assert proc.returncode == 0, stderr
+    (run,) = json.loads(stdout.strip().splitlines()[-1])["runs"]
+    assert run["status"] == "resumed" and run["simulated_seconds"] == pytest.approx(0.3)
+    # the same run uninterrupted
+    import fvdem
+    straight = tmp_path / "straight"
+    case = fvdem.load_case(ROOT / "cases" / "demo.toml", {"particles.count": 150, "gas.u_over_umf": 2.0,
+                                                           "time.end": 0.3, "output.vtk": False,
+                                                           "output.checkpoint_interval": 0.02,
+                                                           "output.timeseries_interval": 0.005,
+                                                           "output.progress": False})
+    fvdem.Simulation(case, straight, threads=1).run()
+    with np.load(straight / "final_state.npz") as a, np.load(Path(run["folder"]) / "final_state.npz") as b:
+        for key in a.files:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
