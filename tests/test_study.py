@@ -120,3 +120,17 @@ case = "{ROOT / 'cases' / 'demo.toml'}"
     with np.load(straight / "final_state.npz") as a, np.load(Path(run["folder"]) / "final_state.npz") as b:
         for key in a.files:
             np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_the_papers_study_and_its_subset_are_the_runs_the_issue_names(tmp_path):
+    full = load_study(ROOT / "studies" / "mema2020.toml", tmp_path)
+    assert len(full.runs) == 22 and full.duration == 20.0
+    families = {f: sorted(r.point["gas.u_over_umf"] for r in full.runs if r.family == f) for f in
+                ("ar1", "ar4_mp", "ar4_sp", "ar4_mp_drag")}
+    assert families["ar1"] == families["ar4_mp"] == families["ar4_sp"] == [1.6, 1.7, 2.0, 2.3, 2.6, 2.9]
+    assert families["ar4_mp_drag"] == [1.6, 1.7, 2.0, 2.9]
+    subset = load_study(ROOT / "studies" / "mema2020_subset.toml", tmp_path)
+    assert sorted(r.name for r in subset.runs) == ["ar1_u_over_umf2", "ar1_u_over_umf2.9", "ar4_mp_drag_u_over_umf2",
+                                                   "ar4_mp_u_over_umf2", "ar4_mp_u_over_umf2.9"]
+    assert subset.duration >= 6 and all(r.overrides["contact.normal_stiffness"] == 800.0 for r in subset.runs)
+    assert all(r.overrides["gas.inlet_ramp"] == 1.0 for r in full.runs + subset.runs)
