@@ -113,7 +113,7 @@ def load_study(path, out) -> Study:
     if not families:
         problems.append("families: a study needs at least one family ([families.NAME] with case = ...)")
     beds_table = _table(table, "beds", problems)
-    out = Path(out)
+    out = Path(out).resolve()  # run folders and bed states are read from other folders (the cases')
     base = path.parent
 
     def entry(kind, key, spec):

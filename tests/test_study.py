@@ -14,8 +14,11 @@ ROOT = Path(__file__).resolve().parents[1]
 SMOKE = ROOT / "studies" / "smoke.toml"
 
 
-def test_the_study_files_expand_into_checked_runs(tmp_path):
-    smoke = load_study(SMOKE, tmp_path)
+def test_the_study_files_expand_into_checked_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    smoke = load_study(SMOKE, "relative/out")  # make smoke passes a relative --out
+    assert all(Path(r.folder).is_absolute() and Path(r.folder).is_relative_to(tmp_path) for r in smoke.runs)
+    assert Path(smoke.beds[0].folder) == tmp_path / "relative" / "out" / "beds" / "small"
     assert [r.name for r in smoke.runs] == ["ar1_u_over_umf2", "ar1_u_over_umf2.9"]
     assert [b.name for b in smoke.beds] == ["small"] and all(r.bed == "small" for r in smoke.runs)
     assert smoke.runs[1].overrides["gas.u_over_umf"] == 2.9 and smoke.runs[1].overrides["time.end"] == 0.02
