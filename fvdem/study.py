@@ -307,9 +307,45 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
     return summary
 
 
+def _pairs(runs, first, second) -> dict:
+    """``{axes values: (run of family first, run of family second)}`` where both ran at those values."""
+    by = {}
+    for r in runs:
+        by.setdefault(tuple(r.get("point", {}).values()), {})[r["family"]] = r
+    return {point: (fam[first], fam[second]) for point, fam in by.items() if first in fam and second in fam}
+
+
+def plot_void_fractions(runs, path, below=0.3):
+    """Histograms of the cell void fraction below ``below`` [m] over each run's gas snapshots (the
+    first, the initial state, left out), on one chart (seed 000 Fig. 7)."""
+    import meshio
+    import numpy as np
+    from .analysis.mixing import void_fraction_histogram
+    from .analysis.plots import _pyplot, _save
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    for r in runs:
+        values, centres = [], None
+        for snapshot in sorted(Path(r["folder"]).glob("gas_*.vtu"))[1:]:
+            grid = meshio.read(snapshot)
+            centres = grid.points[grid.cells[0].data].mean(axis=1)
+            values.append(grid.cell_data["voidage"][0])
+        if values:
+            counts, edges = void_fraction_histogram(np.concatenate(values), np.tile(centres, (len(values), 1)), below)
+            ax.step(0.5 * (edges[1:] + edges[:-1]), counts, where="mid", label=f"{r['name']} ({len(values)} snapshots)")
+    ax.set_xlabel("cell void fraction")
+    ax.set_ylabel("probability density")
+    ax.set_title(f"cells below z = {below} m")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, Path(path))
+
+
 def report(out) -> list:
     """The study's figures and table from its run folders: mixing entropy against time per family
-    (seed 000 Fig. 2), t95 against U/Umf (Fig. 4), and ``table.csv`` / ``table.json``."""
+    (seed 000 Fig. 2), t95 against U/Umf (Fig. 4), AR-1 against AR-4 MP (Fig. 3) with their void
+    fractions below 0.3 m (Fig. 7) and AR-4 MP drag only against drag + lift + torque (Fig. 9) at each
+    velocity both ran, and ``table.csv`` / ``table.json``."""
     from .analysis.plots import plot_mixing, plot_t95
     out = Path(out)
     result = json.loads((out / "study.json").read_text())
@@ -320,6 +356,14 @@ def report(out) -> list:
                                  out / f"mixing_{family}.png"))
     if runs:
         paths.append(plot_t95([Path(r["folder"]) for r in runs], out / "t95.png"))
+    # seed 000 Fig. 3 (AR-1 against AR-4 MP) and Fig. 9 (AR-4 MP drag only against drag + lift + torque)
+    # at each velocity both families ran; Fig. 7 (void fractions below 0.3 m) of the same pairs
+    for figure, (first, second) in (("fig3", ("ar1", "ar4_mp")), ("fig9", ("ar4_mp_drag", "ar4_mp"))):
+        for point, pair in sorted(_pairs(runs, first, second).items()):
+            tag = "_".join(f"{v:g}" for v in point)
+            paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{tag}.png"))
+            if figure == "fig3":
+                paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{tag}.png"))
     rows = []
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"

@@ -137,3 +137,22 @@ def test_the_papers_study_and_its_subset_are_the_runs_the_issue_names(tmp_path):
                                                    "ar4_mp_u_over_umf2", "ar4_mp_u_over_umf2.9"]
     assert subset.duration >= 6 and all(r.overrides["contact.normal_stiffness"] == 800.0 for r in subset.runs)
     assert all(r.overrides["gas.inlet_ramp"] == 1.0 for r in full.runs + subset.runs)
+
+
+def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path):
+    """Figs. 3 / 7 (AR-1 against AR-4 MP) and 9 (AR-4 MP drag only against full) at the velocities both
+    families ran; a family without its partner draws no pair."""
+    from fvdem.study import report
+    runs = []
+    for family, ratio in (("ar1", 2.0), ("ar4_mp", 2.0), ("ar4_mp", 2.9), ("ar4_mp_drag", 2.9), ("ar1", 1.6)):
+        folder = tmp_path / "runs" / f"{family}_{ratio}"
+        folder.mkdir(parents=True)
+        (folder / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.5,0.6\n1.0,0.97\n")
+        (folder / "case.toml").write_text(f'name = "{family}"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = {ratio}\n')
+        runs.append({"name": folder.name, "family": family, "status": "finished", "folder": str(folder),
+                     "t95": 1.0, "point": {"gas.u_over_umf": ratio}})
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    names = sorted(Path(p).name for p in report(tmp_path))
+    assert "fig3_mixing_2.png" in names and "fig7_void_fraction_2.png" in names and "fig9_mixing_2.9.png" in names
+    assert not any(n.startswith(("fig3_mixing_1.6", "fig3_mixing_2.9", "fig9_mixing_2.png")) for n in names)
+    assert {"mixing_ar1.png", "mixing_ar4_mp.png", "t95.png", "table.csv", "table.json"} <= set(names)
