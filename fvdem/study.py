@@ -345,7 +345,7 @@ def report(out) -> list:
     """The study's figures and table from its run folders: mixing entropy against time per family
     (seed 000 Fig. 2), t95 against U/Umf (Fig. 4), AR-1 against AR-4 MP (Fig. 3) with their void
     fractions below 0.3 m (Fig. 7) and AR-4 MP drag only against drag + lift + torque (Fig. 9) at each
-    velocity both ran, and ``table.csv`` / ``table.json``."""
+    velocity both ran, ``table.csv`` / ``table.json``, and ``findings.json`` (``check_findings``)."""
     from .analysis.plots import plot_mixing, plot_t95
     out = Path(out)
     result = json.loads((out / "study.json").read_text())
@@ -377,4 +377,78 @@ def report(out) -> list:
     columns = list(dict.fromkeys(k for row in rows for k in row))
     lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
     (out / "table.csv").write_text("\n".join(lines) + "\n")
-    return paths + [out / "table.csv", out / "table.json"]
+    findings = check_findings(rows)
+    (out / "findings.json").write_text(json.dumps(findings, indent=1) + "\n")
+    return paths + [out / "table.csv", out / "table.json", out / "findings.json"]
+
+
+# seed 000's findings (§5-§6) that a study's t95 table can check; each rule sees the runs by family
+CLOSE = 0.10  # relative differences below this need replicas to be told from chaos
+
+
+def _t95(rows, family):
+    """``{U/Umf: [t95 or None, ...]}`` of the finished runs of a family (replicas listed together)."""
+    out = {}
+    for r in rows:
+        if r["family"] == family and r["status"] != "failed" and "gas.u_over_umf" in r:
+            out.setdefault(r["gas.u_over_umf"], []).append(r["t95"])
+    return out
+
+
+def _compare(rows, faster, slower, velocities, claim):
+    """``faster`` mixes sooner than ``slower`` at every velocity of ``velocities`` both ran."""
+    a, b = _t95(rows, faster), _t95(rows, slower)
+    common = sorted(v for v in set(a) & set(b) if velocities(v))
+    if not common:
+        return {"finding": claim, "verdict": "open", "why": f"no velocity where both {faster} and {slower} ran"}
+    values, why = {}, []
+    for v in common:
+        if None in a[v] or None in b[v]:
+            return {"finding": claim, "verdict": "open", "why": f"not mixed by the run's end at {v:g} Umf (too short)",
+                    "values": values}
+        ta, tb = sum(a[v]) / len(a[v]), sum(b[v]) / len(b[v])
+        values[f"{v:g}"] = {faster: ta, slower: tb}
+        if abs(ta - tb) < CLOSE * max(ta, tb) and min(len(a[v]), len(b[v])) < 2:
+            why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas")
+    if why:
+        return {"finding": claim, "verdict": "open", "why": "; ".join(why) + " (too noisy to tell)", "values": values}
+    holds = all(values[k][faster] < values[k][slower] for k in values)
+    return {"finding": claim, "verdict": "holds" if holds else "does not hold", "values": values}
+
+
+def check_findings(rows) -> list:
+    """Each finding of seed 000 (§5-§6) that t95 can decide, with fvdem's numbers and one word: holds,
+    does not hold, or open (and why: runs missing, too short to mix, or differences within the noise
+    without replicas). The void-fraction finding (AR-1 more binary than AR-4) is read from Fig. 7."""
+    findings = [
+        _compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
+        _compare(rows, "ar4_mp", "ar4_mp_drag", lambda v: True, "lift and torque shorten AR-4 mixing"),
+    ]
+    sp, mp = _t95(rows, "ar4_sp"), _t95(rows, "ar4_mp")
+    common = [v for v in sorted(set(sp) & set(mp)) if None not in sp[v] + mp[v]]
+    claim = "single- against multi-particle closures: only a slight effect on AR-4 mixing"
+    if not common:
+        findings.append({"finding": claim, "verdict": "open", "why": "no velocity where SP and MP both mixed"})
+    else:
+        gaps = {f"{v:g}": abs(sum(sp[v]) / len(sp[v]) - sum(mp[v]) / len(mp[v])) / (sum(mp[v]) / len(mp[v]))
+                for v in common}
+        findings.append({"finding": claim, "verdict": "holds" if max(gaps.values()) < 0.2 else "does not hold",
+                         "values": gaps, "rule": "t95 within 20 %"})
+    for family, paper in (("ar1", 2.6), ("ar4_mp", 2.3)):
+        claim = f"terminal t95 of {family} about {paper} s (paper)"
+        t = _t95(rows, family)
+        high = [v for v in t if v >= 2.3]
+        if len(high) < 2:
+            findings.append({"finding": claim, "verdict": "open", "why": "fewer than two velocities at or above 2.3 Umf"})
+        elif any(None in t[v] for v in high):
+            findings.append({"finding": claim, "verdict": "open", "why": "not mixed by the run's end (too short)"})
+        else:
+            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in sorted(high)}
+            spread = (max(means.values()) - min(means.values())) / max(means.values())
+            terminal = sum(means.values()) / len(means)
+            findings.append({"finding": claim + ", little change above 2.3 Umf",
+                             "verdict": "holds" if spread < 0.2 and abs(terminal / paper - 1) < 0.25 else "does not hold",
+                             "values": means, "rule": "spread < 20 % and mean within 25 % of the paper"})
+    findings.append({"finding": "AR-1 void fractions more binary than AR-4 (Fig. 7)", "verdict": "open",
+                     "why": "read from fig7_void_fraction_*.png; not yet scored"})
+    return findings

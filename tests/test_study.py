@@ -156,3 +156,24 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path):
     assert "fig3_mixing_2.png" in names and "fig7_void_fraction_2.png" in names and "fig9_mixing_2.9.png" in names
     assert not any(n.startswith(("fig3_mixing_1.6", "fig3_mixing_2.9", "fig9_mixing_2.png")) for n in names)
     assert {"mixing_ar1.png", "mixing_ar4_mp.png", "t95.png", "table.csv", "table.json"} <= set(names)
+
+
+def test_the_papers_findings_are_checked_from_the_t95_table():
+    from fvdem.study import check_findings
+
+    def row(family, ratio, t95):
+        return {"family": family, "status": "finished", "gas.u_over_umf": ratio, "t95": t95}
+
+    rows = [row("ar1", 1.6, 6.0), row("ar4_mp", 1.6, 4.0), row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 2.5),
+            row("ar4_mp_drag", 2.0, 3.5), row("ar1", 2.9, 2.7), row("ar1", 2.6, 2.5), row("ar4_mp", 2.9, None)]
+    verdicts = {f["finding"].split(" (")[0].split(",")[0]: f["verdict"] for f in check_findings(rows)}
+    assert verdicts["AR-4"] == "holds"  # 4.0 < 6.0 and 2.5 < 3.0
+    assert verdicts["lift and torque shorten AR-4 mixing"] == "holds"  # 2.5 < 3.5 at 2.0 Umf
+    assert verdicts["single- against multi-particle closures: only a slight effect on AR-4 mixing"] == "open"
+    assert verdicts["terminal t95 of ar1 about 2.6 s"] == "holds"  # 2.5 and 2.7: spread 7 %, mean 2.6
+    assert verdicts["terminal t95 of ar4_mp about 2.3 s"] == "open"  # one velocity above 2.3, not mixed
+    # a difference within 10 % without replicas cannot be told from chaos
+    close = check_findings([row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 2.9)])[0]
+    assert close["verdict"] == "open" and "too noisy" in close["why"]
+    slower = check_findings([row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 4.0)])[0]
+    assert slower["verdict"] == "does not hold"
