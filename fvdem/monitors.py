@@ -10,9 +10,10 @@ from collections import deque
 
 import numpy as np
 
+from .analysis.bed import particle_top
 from .dem.system import SimulationError
 
-# a step costing this many times the run's first measured rate is warned about (once)
+# a chunk costing this many times the median step of the recent chunks is warned about (once)
 RUNAWAY_COST = 20.0
 # overlaps beyond this fraction of the diameter leave the range the soft defaults were chosen in: the
 # reduced beds of tools/speed_accuracy.py --quick reached 5.0-5.4 % (AR-1) and 7.2 % (AR-4) at the
@@ -33,7 +34,8 @@ def particle_speeds(model) -> tuple[float, float]:
 
 
 class RunawayWatch:
-    """``cost(steps, seconds)`` after each chunk of loop steps; ``gas(gas_max_speed)`` at each sample."""
+    """``cost(steps, seconds)`` after each chunk of loop steps; ``particles(values)`` and ``gas(values)``
+    at each sample."""
 
     RECENT = 200  # chunks the typical cost is the median of
 
@@ -41,8 +43,7 @@ class RunawayWatch:
         self.model = model
         self.recent = deque(maxlen=self.RECENT)  # (seconds per step, neighbour rebuilds, step) per chunk
         self.chunks = 0
-        self.warned = False
-        self.warned_about: set = set()  # the particle warnings given
+        self.warned_about: set = set()  # the warnings given ("cost", "overlap", "outlet"), each once
 
     def cost(self, steps: int, seconds: float) -> None:
         """Warn once when a chunk's wall time per step exceeds ``RUNAWAY_COST`` times the median of the
@@ -55,10 +56,10 @@ class RunawayWatch:
         self.chunks += 1
         if self.chunks == 1:
             return
-        if not self.warned and len(self.recent) >= 3:
+        if "cost" not in self.warned_about and len(self.recent) >= 3:
             typical = sorted(self.recent)[len(self.recent) // 2]
             if rate >= RUNAWAY_COST * typical[0]:
-                self.warned = True
+                self.warned_about.add("cost")
                 self._warn(rate, typical, rebuilds)
         self.recent.append((rate, rebuilds, model.step_count))
 
@@ -99,7 +100,7 @@ class RunawayWatch:
         if gas is None or gas.config.inlet_velocity <= 0 or box.periodic[2] or "outlet" in self.warned_about:
             return
         p = model.particles
-        top = p.position[:, 2] + p.radius + p.half_length * np.abs(p.axis[:, 2])
+        top = particle_top(p.position, p.axis, p.radius, p.half_length)
         touching = int(np.count_nonzero(top > box.upper[2] - 0.5 * (p.radius + p.half_length)))
         if touching > OUTLET_PILE_SHARE * p.count:
             self.warned_about.add("outlet")
@@ -108,14 +109,15 @@ class RunawayWatch:
                           "stay pinned there (a full-speed start under a packed bed); start with gas.inlet_ramp "
                           "(e.g. 1 s) or a lower gas.u_over_umf", RuntimeWarning, stacklevel=4)
 
-    def gas(self, gas_max_speed: float) -> None:
+    def gas(self, values: dict) -> None:
         """Stop a walled column whose gas runs far faster than anything drives it: the inlet's
-        interstitial speed in the densest packing (U / 0.3) and the fastest particle."""
+        interstitial speed in the densest packing (U / 0.3) and the fastest particle (``values``: the
+        sample's, ``gas_max_speed`` and, with particles, ``max_speed``)."""
         gas = self.model.gas
         if gas is None or gas.solver.periodic or gas.config.inlet_velocity <= 0:
             return
-        fastest = particle_speeds(self.model)[0] if self.model.dem is not None else 0.0
-        drive = max(gas.config.inlet_velocity / 0.3, fastest)
+        gas_max_speed = values["gas_max_speed"]
+        drive = max(gas.config.inlet_velocity / 0.3, values.get("max_speed", 0.0))
         if gas_max_speed > RUNAWAY_GAS_SPEED * drive:
             raise SimulationError(
                 f"the gas runs away at t = {self.model.time:.6g} s: largest cell speed {gas_max_speed:.3g} m/s, "

@@ -142,7 +142,7 @@ class Simulation:
             self.model.check_health()
             values = self.diagnostics()
             if "gas_max_speed" in values:
-                self.watch.gas(values["gas_max_speed"])
+                self.watch.gas(values)
             self.watch.particles(values)
             self.scene.record(self.model, values, self.run_state.histories)
             if self.out is not None:

@@ -76,10 +76,6 @@ class GasPhase:
         self.solver.beta[self.zone] += (1.0 - z.voidage) * ergun_beta_per_solids(
             z.voidage, speed, z.particle_diameter, self.config.density, self.config.viscosity)
 
-    @property
-    def timings(self):
-        return self.solver.timings
-
     def step(self) -> dict:
         t0 = perf_counter()
         inner = self.solver.timings.seconds["gas_momentum"] + self.solver.timings.seconds["gas_pressure"]
