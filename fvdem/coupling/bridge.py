@@ -7,7 +7,8 @@ Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
    voidage becomes the old level of the gas's ``d(eps)/dt``.
 2. **Closures** at the particles: gas velocity (reconstructed from the face fluxes:
    ``GasSolver.flux_velocity``, exact across voidage jumps) and voidage interpolated, slip
-   ``u - v``, drag coefficient ``c`` [kg/s] (drag ``F_D = c (u - v)``), lift and torque.
+   ``u - v``, drag coefficient ``c`` [kg/s] (drag ``F_D = c (u - v)``), lift and torque, each law's
+   compiled kernel (``kernels.py``; the numpy closures are the reference they are tested against).
 3. **Gas step** with Eq. 8, ``R = -sum (F_D + F_L) / V_cell``, deposited with the transposed
    interpolation weights. *Semi-implicit* (default): the drag enters the gas momentum as
    ``-beta u + S``. The coefficient accounts for the particle's own response over the interval:
@@ -42,6 +43,7 @@ from ..dem.particles import spherocylinder_volume
 from ..dem.system import SimulationError
 from . import closures
 from .interpolation import ParticleGridMap
+from .kernels import exchange_terms
 from .voidage import voidage as map_voidage
 
 
@@ -68,15 +70,18 @@ class HydrodynamicModel:
 
     def drag_coefficient(self, slip, voidage, axis):
         """``c`` [kg/s] (N,) with ``F_D = c * slip``."""
-        return closures.law("drag", self.drag).function(self.particle, slip, voidage, axis)
+        return closures.law("drag", self.drag).evaluate(self.particle, slip, voidage, axis)
 
     def lift_force(self, slip, voidage, axis):
         """Lift [N] (N, 3), or None when the model has none."""
-        return closures.law("lift", self.lift).function(self.particle, slip, voidage, axis)
+        return closures.law("lift", self.lift).evaluate(self.particle, slip, voidage, axis)
 
     def hydrodynamic_torque(self, slip, voidage, axis):
         """Hydrodynamic torque [N m] (N, 3), or None when the model has none."""
-        return closures.law("torque", self.torque).function(self.particle, slip, voidage, axis)
+        return closures.law("torque", self.torque).evaluate(self.particle, slip, voidage, axis)
+
+
+_NO_LIFT = np.zeros((0, 3))  # exchange_terms' "no lift"
 
 
 def rotational_drag_torque(angular_velocity, inertia, coefficient, dt):
@@ -91,7 +96,8 @@ def rotational_drag_torque(angular_velocity, inertia, coefficient, dt):
 
 def particle_response(mass, drag_coefficient, substep, substeps):
     """``(1 - R, k)`` of the implicit kicks over one coupling interval: ``R = (1 + q)^(-2n)``,
-    ``q = (h / 2) c / m``, and ``k = (1 - R) m / (c dt) - 1`` (0 where ``c = 0``), ``dt = n h``."""
+    ``q = (h / 2) c / m``, and ``k = (1 - R) m / (c dt) - 1`` (0 where ``c = 0``), ``dt = n h``. The numpy
+    reference of ``kernels.exchange_terms``, which the bridge runs."""
     q = 0.5 * substep * drag_coefficient / mass
     one_minus_r = -np.expm1(-2.0 * substeps * np.log1p(q))
     x = drag_coefficient * substep * substeps / mass
@@ -172,19 +178,18 @@ class CouplingBridge:
             explicit_drag = c[:, None] * slip
             self._check_explicit_stability(c, p.mass)
         if cfg.two_way:
-            if explicit_drag is not None:
-                beta, exchanged = np.zeros(mesh.cell_count), -explicit_drag
-            elif self.fixed:
-                beta, exchanged = scatter(c) / mesh.cell_volumes, np.zeros_like(slip)
-            else:
-                one_minus_r, k = particle_response(p.mass, c, dem.dt, self.substeps)
-                accel = (p.contact_force + p.external_force) / p.mass[:, None] + dem.gravity
-                coefficient = p.mass * one_minus_r / dt
-                beta = scatter(coefficient) / mesh.cell_volumes
-                exchanged = coefficient[:, None] * velocity - (p.mass * k)[:, None] * accel
-            if lift is not None:
-                exchanged = exchanged - lift
-            gas.set_exchange(beta, scatter(exchanged) / volume_cells)
+            if explicit_drag is not None or self.fixed:
+                beta = np.zeros(mesh.cell_count) if explicit_drag is not None else scatter(c)
+                exchanged = np.zeros_like(slip) if explicit_drag is None else -explicit_drag
+                source = scatter(exchanged if lift is None else exchanged - lift)
+            else:  # response, coefficient, source and their deposition in one kernel pass
+                t = clock()
+                beta, source = exchange_terms(p.mass, c, velocity, p.contact_force + p.external_force,
+                                              np.asarray(dem.gravity, float), _NO_LIFT if lift is None else lift,
+                                              dem.dt, self.substeps, dt, grid_map.cells, grid_map.weights,
+                                              np.zeros(mesh.cell_count), np.zeros((mesh.cell_count, 3)))
+                deposited += clock() - t
+            gas.set_exchange(beta / mesh.cell_volumes, source / volume_cells)
         t_gas = clock()
         gas.step()
         t_after_gas = clock()
@@ -223,9 +228,8 @@ class CouplingBridge:
             # the gas lost V (beta u - S) dt per cell (u its momentum velocity); the particles gained
             # the drag impulse the kicks applied (with the flux velocity): return the difference
             lost = (gas.exchange_beta[:, None] * s.velocity - gas.exchange_source) * volume_cells * dt
-            if lift is not None:
-                lost -= scatter(lift) * dt  # the lift is explicit on both sides: not in the balance
-            difference = lost - scatter(impulse)
+            # the lift is explicit on both sides: not in the balance (one deposition of both)
+            difference = lost - scatter(impulse if lift is None else impulse + lift * dt)
             gas.returned_momentum += difference  # a source of the next gas step
             returned = float(np.abs(difference.sum(axis=0)).max())
         drag_force = explicit_drag.sum(axis=0) if impulse is None else impulse.sum(axis=0) / dt

@@ -373,6 +373,11 @@ class ParticleShape:
     def is_sphere(self) -> bool:
         return self.length <= self.diameter
 
+    @property
+    def kernel_args(self) -> np.ndarray:
+        """``(diameter, length, d_p, rho, mu)``: what the compiled kernels (``kernels.py``) read."""
+        return np.array([self.diameter, self.length, self.equivalent_diameter, self.density, self.viscosity])
+
 
 @dataclass(frozen=True)
 class Law:
@@ -386,6 +391,26 @@ class Law:
     summary: str
     re_range: tuple | None = None  # (low, high) superficial Re it was fitted on, where stated
     solids_range: tuple | None = None  # (low, high) solids fraction
+    kernel: str | None = None  # its compiled form: a function of ``kernels.py`` (None: numpy only)
+
+    def evaluate(self, particle: "ParticleShape", slip, voidage, axis):
+        """The law at the particles: its compiled kernel when it has one (the bridge's path), else
+        ``function`` (the numpy reference; tests/test_kernels.py holds them equal to 1e-12)."""
+        if self.kernel is None:
+            return self.function(particle, slip, voidage, axis)
+        from . import kernels
+        slip = np.ascontiguousarray(np.atleast_2d(slip), dtype=float)
+        n = len(slip)
+        voidage = np.ascontiguousarray(np.broadcast_to(np.asarray(voidage, float), (n,)))
+        axis = np.ascontiguousarray(np.broadcast_to(np.asarray(axis, float), (n, 3)))
+        shape = particle.kernel_args
+        out = np.empty(n) if self.kind == "drag" else np.empty((n, 3))
+        getattr(kernels, self.kernel)(slip, voidage, axis, shape, out)
+        if (self.re_range is not None or self.solids_range is not None) and n:
+            reynolds = kernels.slip_reynolds(slip, voidage, shape, np.empty(n))
+            warn_outside_range(self.name, reynolds, 1.0 - voidage, self.re_range or (-np.inf, np.inf),
+                               self.solids_range or (-np.inf, np.inf))
+        return out
 
     def outside(self, reynolds: float, solids: float) -> list:
         """What of (Re, solids fraction) lies outside the fitted ranges, in words (empty: inside)."""
@@ -400,11 +425,12 @@ LAWS: dict[str, dict[str, Law]] = {"drag": {}, "lift": {}, "torque": {}}
 
 
 def register(kind, name, *, shapes=("sphere", "spherocylinder"), aspect_ratio=None, validity="", reference="",
-             summary="", re_range=None, solids_range=None):
-    """Decorator: register ``function`` as the ``kind`` law ``name``."""
+             summary="", re_range=None, solids_range=None, kernel=None):
+    """Decorator: register ``function`` as the ``kind`` law ``name``; ``kernel`` names its compiled
+    form in ``kernels.py`` (optional: without one the numpy function runs)."""
     def decorate(function):
         LAWS[kind][name] = Law(kind, name, function, tuple(shapes), aspect_ratio, validity, reference, summary,
-                               re_range, solids_range)
+                               re_range, solids_range, kernel)
         return function
     return decorate
 
@@ -427,7 +453,8 @@ def describe_laws(kind: str) -> str:
 
 @register("drag", "hoelzer-sommerfeld", validity="any Re; the voidage function is Di Felice's (eps 0.4-1)",
           reference="Hoelzer & Sommerfeld (2008), Powder Technol. 184; Di Felice (1994), Int. J. Multiph. Flow 20",
-          summary="Hoelzer-Sommerfeld with Di Felice's voidage function (single-particle, any shape)")
+          summary="Hoelzer-Sommerfeld with Di Felice's voidage function (single-particle, any shape)",
+          kernel="hoelzer_sommerfeld_drag")
 def _hoelzer_sommerfeld(particle, slip, voidage, axis):
     args = (slip, voidage, particle.equivalent_diameter, particle.density, particle.viscosity)
     if particle.is_sphere:
@@ -439,7 +466,7 @@ def _hoelzer_sommerfeld(particle, slip, voidage, axis):
 @register("drag", "sanjeevi-padding", shapes=("spherocylinder",), aspect_ratio=4.0,
           validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",
           reference="Sanjeevi & Padding (2020), AIChE J. 66; seed 000 Table 2",
-          summary="Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders)")
+          summary="Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders)", kernel="sanjeevi_padding_drag")
 def _sanjeevi_padding_drag(particle, slip, voidage, axis):
     return multi_particle_drag_coefficient(slip, voidage, axis, particle.equivalent_diameter, particle.density,
                                            particle.viscosity)
@@ -448,7 +475,7 @@ def _sanjeevi_padding_drag(particle, slip, voidage, axis):
 @register("drag", "gidaspow", validity="Ergun below voidage 0.8, Wen-Yu above (Re < 1000 in the Schiller-Naumann term)",
           reference="Gidaspow (1994), Multiphase Flow and Fluidization; Ergun (1952); Wen & Yu (1966)",
           summary="Gidaspow (Ergun below voidage 0.8 with the sphericity, Wen-Yu above; not a seed 000 closure: "
-                  "it reproduces Ergun's packed-bed pressure drop, docs/validation.md)")
+                  "it reproduces Ergun's packed-bed pressure drop, docs/validation.md)", kernel="gidaspow_drag")
 def _gidaspow(particle, slip, voidage, axis):
     sphericity = 1.0 if particle.is_sphere else float(sphericities(particle.diameter, particle.length, 0.0)[0])
     return gidaspow_drag_coefficient(slip, voidage, particle.equivalent_diameter, particle.density,
@@ -504,7 +531,7 @@ register("drag", "beetstra", validity="solids fraction 0.1-0.6, Re 0-1000 (super
          "times the isolated Hoelzer-Sommerfeld shape ratio",
          reference="Beetstra, van der Hoef & Kuipers (2007), AIChE J. 53, 489-501, Eq. 15",
          summary="Beetstra-van der Hoef-Kuipers 2007 (lattice-Boltzmann random sphere arrays; rods by the "
-                 "isolated shape ratio)", re_range=(0.0, 1000.0), solids_range=(0.1, 0.6))(
+                 "isolated shape ratio)", re_range=(0.0, 1000.0), solids_range=(0.1, 0.6), kernel="beetstra_drag")(
              _dense("beetstra", beetstra_normalised))
 
 
@@ -512,7 +539,8 @@ register("drag", "tenneti", validity="solids fraction 0.1-0.5, Re 0.01-300 (supe
          "times the isolated Hoelzer-Sommerfeld shape ratio",
          reference="Tenneti, Garg & Subramaniam (2011), Int. J. Multiph. Flow 37, 1072-1092, Eqs. 9-12",
          summary="Tenneti-Garg-Subramaniam 2011 (immersed-boundary DNS of random sphere arrays; Schiller-Naumann "
-                 "when dilute; rods by the isolated shape ratio)", re_range=(0.0, 300.0), solids_range=(0.0, 0.5))(
+                 "when dilute; rods by the isolated shape ratio)", re_range=(0.0, 300.0), solids_range=(0.0, 0.5),
+         kernel="tenneti_drag")(
              _dense("tenneti", tenneti_normalised))
 
 
@@ -520,7 +548,7 @@ register("drag", "tang", validity="solids fraction 0.1-0.6, Re 50-1000 (superfic
          "creeping-flow terms; spherocylinders: times the isolated Hoelzer-Sommerfeld shape ratio",
          reference="Tang, Peters, Kuipers, Kriebitzsch & van der Hoef (2015), AIChE J. 61, 688-698, Eq. 20",
          summary="Tang et al. 2015 (immersed-boundary DNS of random sphere arrays, Re 50-1000; rods by the "
-                 "isolated shape ratio)", re_range=(0.0, 1000.0), solids_range=(0.1, 0.6))(
+                 "isolated shape ratio)", re_range=(0.0, 1000.0), solids_range=(0.1, 0.6), kernel="tang_drag")(
              _dense("tang", tang_normalised))
 
 
@@ -541,8 +569,9 @@ for _kind, _single, _multi in (("lift", single_particle_lift, multi_particle_lif
     register(_kind, "zastawny", shapes=("spherocylinder",), aspect_ratio=4.0,
              validity="isolated particle, Re 0.1-1000 (seed 000 Table 3, aspect ratio 4)",
              reference="Zastawny et al. (2012), Int. J. Multiph. Flow 39; seed 000 Table 3",
-             summary="Zastawny form with seed 000's Table 3 (single-particle, AR-4)")(_oriented(_single))
+             summary="Zastawny form with seed 000's Table 3 (single-particle, AR-4)",
+             kernel=f"zastawny_{_kind}")(_oriented(_single))
     register(_kind, "sanjeevi-padding", shapes=("spherocylinder",), aspect_ratio=4.0,
              validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",
              reference="Sanjeevi & Padding (2020), AIChE J. 66",
-             summary="Sanjeevi-Padding 2020 (multi-particle, AR-4)")(_oriented(_multi))
+             summary="Sanjeevi-Padding 2020 (multi-particle, AR-4)", kernel=f"sanjeevi_padding_{_kind}")(_oriented(_multi))

@@ -46,53 +46,44 @@ def interpolate(mesh, field, points):
 # --------------------------------------------------------------------------- particle <-> cell weights
 
 
+@njit(cache=True, inline="always")
+def _axis_weights(coordinate, first_centre, spacing, n, periodic, kernel):
+    """Lower and upper cell index along one axis and the upper one's weight: the cell holding the
+    point (``NEAREST``; weight 0) or the two centres around it (``TRILINEAR``); beyond the outermost
+    centres of a walled axis the boundary cell alone (zero gradient), wrapped on a periodic one."""
+    t = (coordinate - first_centre) / spacing
+    if kernel == NEAREST:
+        c = int(np.floor(t + 0.5))
+        if periodic:
+            c %= n
+        else:
+            c = min(max(c, 0), n - 1)
+        return c, c, 0.0
+    i0 = int(np.floor(t))
+    if periodic:
+        return i0 % n, (i0 + 1) % n, t - i0
+    if i0 < 0:
+        return 0, 0, 0.0
+    if i0 >= n - 1:
+        return n - 1, n - 1, 0.0
+    return i0, i0 + 1, t - i0
+
+
 @njit(cache=True)
 def _point_weights(x, y, z, share, kernel, first_centre, spacing, shape, periodic, cells, weights, start):
     """Write the 8 (trilinear) or 1 (nearest cell) cell/weight pairs of one point into slots from
-    ``start``; returns the next free slot."""
+    ``start``; returns the next free slot. No allocation: it runs once per point per coupling step."""
     nx, ny = shape[0], shape[1]
-    point = (x, y, z)
-    lo = np.empty(3, np.int64)
-    hi = np.empty(3, np.int64)
-    w = np.empty(3)
-    for d in range(3):
-        t = (point[d] - first_centre[d]) / spacing[d]
-        n = shape[d]
-        if kernel == NEAREST:
-            c = int(np.floor(t + 0.5))
-            if periodic[d]:
-                c %= n
-            else:
-                c = min(max(c, 0), n - 1)
-            lo[d] = c
-            hi[d] = c
-            w[d] = 0.0
-            continue
-        i0 = int(np.floor(t))
-        f = t - i0
-        if periodic[d]:
-            lo[d] = i0 % n
-            hi[d] = (i0 + 1) % n
-            w[d] = f
-        elif i0 < 0:
-            lo[d] = 0
-            hi[d] = 0
-            w[d] = 0.0
-        elif i0 >= n - 1:
-            lo[d] = n - 1
-            hi[d] = n - 1
-            w[d] = 0.0
-        else:
-            lo[d] = i0
-            hi[d] = i0 + 1
-            w[d] = f
+    lx, hx, wx = _axis_weights(x, first_centre[0], spacing[0], shape[0], periodic[0], kernel)
+    ly, hy, wy = _axis_weights(y, first_centre[1], spacing[1], shape[1], periodic[1], kernel)
+    lz, hz, wz = _axis_weights(z, first_centre[2], spacing[2], shape[2], periodic[2], kernel)
     corners = 1 if kernel == NEAREST else 8
     for corner in range(corners):
-        ix = hi[0] if corner & 1 else lo[0]
-        iy = hi[1] if corner & 2 else lo[1]
-        iz = hi[2] if corner & 4 else lo[2]
-        weight = ((w[0] if corner & 1 else 1.0 - w[0]) * (w[1] if corner & 2 else 1.0 - w[1])
-                  * (w[2] if corner & 4 else 1.0 - w[2]))
+        ix = hx if corner & 1 else lx
+        iy = hy if corner & 2 else ly
+        iz = hz if corner & 4 else lz
+        weight = ((wx if corner & 1 else 1.0 - wx) * (wy if corner & 2 else 1.0 - wy)
+                  * (wz if corner & 4 else 1.0 - wz))
         cells[start] = ix + nx * (iy + ny * iz)
         weights[start] = share * weight
         start += 1
@@ -133,17 +124,33 @@ def gather(field, cells, weights, out):
     return out
 
 
-@njit(cache=True)
+SCATTER_CHUNKS = 4  # particle blocks deposited in parallel, each into its own copy of the cells
+
+
+@njit(cache=True, parallel=True)
 def scatter(values, cells, weights, out):
     """``out[cells[i, k]] += weights[i, k] values[i]``: particle values (N, m) to cells (C, m) — the
-    transpose of ``gather``, so what particles receive and what cells give up sum to the same."""
-    for i in range(cells.shape[0]):
-        for k in range(cells.shape[1]):
-            w = weights[i, k]
-            if w != 0.0:
-                cell = cells[i, k]
-                for c in range(values.shape[1]):
-                    out[cell, c] += w * values[i, c]
+    transpose of ``gather``, so what particles receive and what cells give up sum to the same.
+
+    Race-free in parallel: the particles are cut into ``SCATTER_CHUNKS`` fixed blocks, each deposited
+    into its own copy of the cells, and the copies are added in block order, so the result does not
+    depend on the number of threads (bit for bit)."""
+    n = cells.shape[0]
+    chunks = SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+    partial = np.zeros((chunks, out.shape[0], out.shape[1]))
+    for chunk in numba.prange(chunks):
+        block = partial[chunk]
+        for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
+            for k in range(cells.shape[1]):
+                w = weights[i, k]
+                if w != 0.0:
+                    cell = cells[i, k]
+                    for c in range(values.shape[1]):
+                        block[cell, c] += w * values[i, c]
+    for cell in numba.prange(out.shape[0]):
+        for chunk in range(chunks):
+            for c in range(values.shape[1]):
+                out[cell, c] += partial[chunk, cell, c]
     return out
 
 

@@ -1,0 +1,152 @@
+"""The compiled closures and exchange kernels (``fvdem.coupling.kernels``) against the numpy
+closures they replace in the bridge (kept as the reference), to 1e-12."""
+import warnings
+
+import numba
+import numpy as np
+import pytest
+
+from fvdem.coupling import closures, kernels
+from fvdem.coupling.bridge import particle_response
+from fvdem.coupling.interpolation import scatter
+
+AIR = (1.2, 1.8e-5)
+WATER = (1000.0, 1.0e-3)
+PARTICLES = {  # cylinder diameter, total length, fluid
+    "sphere-air": (5.3e-3, 5.3e-3, AIR),
+    "rod4-air": (3.2e-3, 12.8e-3, AIR),
+    "rod2-water": (2.0e-3, 4.0e-3, WATER),
+}
+
+
+def inputs(n=600, seed=3):
+    """Slips over seven decades (zero, axis-parallel and axis-perpendicular ones included), voidages
+    0.4-1 (1 exactly too) and random orientations."""
+    rng = np.random.default_rng(seed)
+    axis = rng.normal(size=(n, 3))
+    axis /= np.linalg.norm(axis, axis=1)[:, None]
+    direction = rng.normal(size=(n, 3))
+    direction /= np.linalg.norm(direction, axis=1)[:, None]
+    slip = direction * 10.0 ** rng.uniform(-6, 1.3, n)[:, None]
+    slip[0] = 0.0
+    slip[1] = 2.0 * axis[1]  # parallel: no lift or torque
+    perpendicular = np.cross(axis[2], [0.0, 0.0, 1.0])
+    slip[2] = 1.5 * perpendicular / np.linalg.norm(perpendicular)
+    voidage = rng.uniform(0.4, 1.0, n)
+    voidage[3] = 1.0
+    return slip, voidage, axis
+
+
+def assert_close(actual, expected):
+    expected = np.asarray(expected, float)
+    scale = np.abs(expected).max() if expected.size else 0.0
+    np.testing.assert_allclose(actual, expected, rtol=1e-12, atol=1e-12 * scale)
+
+
+LAWS_WITH_KERNELS = [(kind, name) for kind in ("drag", "lift", "torque") for name, law in closures.LAWS[kind].items()
+                     if law.kernel is not None]
+
+
+def test_every_seed_law_has_a_kernel():
+    for kind, name in (("drag", "hoelzer-sommerfeld"), ("drag", "sanjeevi-padding"), ("drag", "gidaspow"),
+                       ("drag", "beetstra"), ("drag", "tenneti"), ("drag", "tang"), ("lift", "zastawny"),
+                       ("lift", "sanjeevi-padding"), ("torque", "zastawny"), ("torque", "sanjeevi-padding")):
+        assert (kind, name) in LAWS_WITH_KERNELS
+
+
+@pytest.mark.parametrize("kind,name", LAWS_WITH_KERNELS)
+@pytest.mark.parametrize("particle_name", list(PARTICLES))
+def test_kernel_equals_numpy_closure(kind, name, particle_name):
+    law = closures.law(kind, name)
+    d, length, (rho, mu) = PARTICLES[particle_name]
+    shape = "sphere" if length <= d else "spherocylinder"
+    if shape not in law.shapes:
+        pytest.skip(f"{name} is not a {shape} law")
+    particle = closures.ParticleShape(d, length, rho, mu)
+    slip, voidage, axis = inputs()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # range warnings of the dense laws
+        expected = law.function(particle, slip, voidage, axis)
+        actual = law.evaluate(particle, slip, voidage, axis)
+    assert actual.shape == expected.shape
+    assert np.all(np.isfinite(actual))
+    assert_close(actual, expected)
+    if kind == "drag":
+        assert np.all(actual > 0)
+    else:  # no lift or torque along the axis
+        assert np.all(actual[[0, 1]] == 0.0)
+
+
+def test_kernel_path_warns_outside_the_fitted_range():
+    closures.reset_range_warnings()
+    particle = closures.ParticleShape(5.3e-3, 5.3e-3, *AIR)
+    slip = np.array([[0.0, 0.0, 3.0]])
+    with pytest.warns(RuntimeWarning, match="tenneti.*Re .* above its fitted range 0-300"):
+        closures.law("drag", "tenneti").evaluate(particle, slip, np.array([0.45]), np.array([[0.0, 0.0, 1.0]]))
+    closures.reset_range_warnings()
+
+
+def test_law_without_kernel_runs_its_numpy_function():
+    law = closures.Law("drag", "constant", lambda particle, slip, voidage, axis: np.full(len(slip), 2.0),
+                       ("sphere",), None, "", "", "")
+    particle = closures.ParticleShape(1e-3, 1e-3, *AIR)
+    assert np.all(law.evaluate(particle, np.ones((4, 3)), np.ones(4), np.ones((4, 3))) == 2.0)
+
+
+def grid_weights(n, cells, width, seed=5):
+    rng = np.random.default_rng(seed)
+    index = rng.integers(0, cells, (n, width)).astype(np.int64)
+    weights = rng.uniform(0, 1, (n, width))
+    weights[rng.uniform(size=(n, width)) < 0.2] = 0.0
+    return index, weights
+
+
+def reference_scatter(values, cells, weights, count):
+    out = np.zeros((count, values.shape[1]))
+    for k in range(cells.shape[1]):
+        np.add.at(out, cells[:, k], weights[:, k, None] * values)
+    return out
+
+
+@pytest.mark.parametrize("n", [3, 1000])
+def test_parallel_scatter_equals_serial_sum_and_is_thread_count_independent(n):
+    cells, weights = grid_weights(n, 50, 8)
+    values = np.random.default_rng(1).normal(size=(n, 3))
+    expected = reference_scatter(values, cells, weights, 50)
+    results = []
+    before = numba.get_num_threads()
+    try:
+        for threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(threads)
+            results.append(scatter(values, cells, weights, np.zeros((50, 3))))
+    finally:
+        numba.set_num_threads(before)
+    assert_close(results[0], expected)
+    for other in results[1:]:
+        assert np.array_equal(other, results[0])  # bit for bit whatever the threads
+
+
+def test_exchange_terms_equal_numpy_response_and_deposition():
+    rng = np.random.default_rng(7)
+    n, count = 2000, 60
+    cells, weights = grid_weights(n, count, 8)
+    weights /= weights.sum(axis=1)[:, None]
+    mass = rng.uniform(1e-5, 1e-4, n)
+    c = 10.0 ** rng.uniform(-6, -2, n)
+    c[0] = 0.0  # no drag: k = 0
+    velocity = rng.normal(size=(n, 3))
+    force = rng.normal(size=(n, 3)) * 1e-3
+    gravity = np.array([0.0, 0.0, -9.81])
+    lift = rng.normal(size=(n, 3)) * 1e-5
+    h, substeps, dt = 5e-5, 10, 5e-4
+    one_minus_r, k = particle_response(mass, c, h, substeps)
+    coefficient = mass * one_minus_r / dt
+    exchanged = coefficient[:, None] * velocity - (mass * k)[:, None] * (force / mass[:, None] + gravity) - lift
+    beta_expected = reference_scatter(coefficient[:, None], cells, weights, count)[:, 0]
+    source_expected = reference_scatter(exchanged, cells, weights, count)
+    for lift_in, source_ref in ((lift, source_expected),
+                                (np.zeros((0, 3)), reference_scatter(exchanged + lift, cells, weights, count))):
+        beta, source = kernels.exchange_terms(mass, c, velocity, force, gravity, lift_in, h, substeps, dt, cells,
+                                              weights, np.zeros(count), np.zeros((count, 3)))
+        assert_close(beta, beta_expected)
+        assert_close(source, source_ref)
