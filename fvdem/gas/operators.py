@@ -32,10 +32,49 @@ def _csr_pattern(rows, cols, n):
     return pattern.indptr, pattern.indices, position
 
 
-class DiffusionOperator:
-    """Face-coefficient diffusion on a ``GasMesh`` with optional Dirichlet boundary faces."""
+class StencilPattern:
+    """The CSR structure of every cell-face operator on a ``GasMesh``: each cell's diagonal and the
+    two couplings of each interior face. Operators built on one shared pattern give data arrays that
+    add entry by entry, so a momentum matrix is one array sum and one CSR construction instead of
+    sparse additions that re-merge the structure (``GasSolver._momentum_system``)."""
 
-    def __init__(self, mesh: GasMesh, dirichlet_faces=()):
+    def __init__(self, mesh: GasMesh):
+        self.n = n = mesh.cell_count
+        interior = np.nonzero(mesh.interior)[0]
+        p, q = mesh.face_cells[interior, 0], mesh.face_cells[interior, 1]
+        cells = np.arange(n)
+        self.indptr, self.indices, _ = _csr_pattern(np.concatenate([cells, p, q]), np.concatenate([cells, q, p]), n)
+        self._lookup = sp.csr_matrix((np.arange(1, len(self.indices) + 1), self.indices, self.indptr), shape=(n, n))
+        self.diagonal_positions = self.positions(cells, cells)
+
+    def positions(self, rows, cols):
+        """Positions of entries ``(rows, cols)`` in the data array (each must be in the pattern)."""
+        position = np.asarray(self._lookup[rows, cols]).ravel() - 1
+        if np.any(position < 0):
+            raise ValueError("entries outside the cell-face stencil")
+        return position
+
+    def matrix(self, data) -> sp.csr_matrix:
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+    def diagonal_data(self, values) -> np.ndarray:
+        data = np.zeros(len(self.indices))
+        data[self.diagonal_positions] = values
+        return data
+
+
+def _pattern_of(rows, cols, n, pattern):
+    """``_csr_pattern`` or, with a shared ``StencilPattern``, its structure and the entries' positions."""
+    if pattern is None:
+        return _csr_pattern(rows, cols, n)
+    return pattern.indptr, pattern.indices, pattern.positions(rows, cols)
+
+
+class DiffusionOperator:
+    """Face-coefficient diffusion on a ``GasMesh`` with optional Dirichlet boundary faces (on its own
+    pattern, or on a shared ``StencilPattern``)."""
+
+    def __init__(self, mesh: GasMesh, dirichlet_faces=(), pattern: StencilPattern | None = None):
         self.mesh = mesh
         n = mesh.cell_count
         interior = np.nonzero(mesh.interior)[0]
@@ -50,16 +89,19 @@ class DiffusionOperator:
         cols = np.concatenate([p, q, q, p, pb])
         faces = np.concatenate([interior, interior, interior, interior, dirichlet])
         signs = np.concatenate([-np.ones(2 * len(interior)), np.ones(2 * len(interior)), -np.ones(len(dirichlet))])
-        self._indptr, self._indices, position = _csr_pattern(rows, cols, n)
+        self._indptr, self._indices, position = _pattern_of(rows, cols, n, pattern)
         self._scatter = sp.csr_matrix((signs, (position, faces)), shape=(len(self._indices), mesh.face_count))
         self._geometry = mesh.face_areas / mesh.face_distances
         self._rhs_scatter = sp.csr_matrix((-np.ones(len(dirichlet)), (pb, dirichlet)), shape=(n, mesh.face_count))
 
+    def data(self, gamma_face) -> np.ndarray:
+        """The CSR data array of the operator for face coefficients ``gamma_face`` (F,)."""
+        return self._scatter @ (np.broadcast_to(gamma_face, self._geometry.shape) * self._geometry)
+
     def matrix(self, gamma_face) -> sp.csr_matrix:
         """The operator for face coefficients ``gamma_face`` (F,)."""
-        weights = np.broadcast_to(gamma_face, self._geometry.shape) * self._geometry
         n = self.mesh.cell_count
-        return sp.csr_matrix((self._scatter @ weights, self._indices, self._indptr), shape=(n, n))
+        return sp.csr_matrix((self.data(gamma_face), self._indices, self._indptr), shape=(n, n))
 
     def rhs(self, gamma_face, boundary_value_face) -> np.ndarray:
         """Right-hand side from Dirichlet values ``boundary_value_face`` (F,; read on Dirichlet faces)."""
@@ -83,7 +125,7 @@ class UpwindConvectionOperator:
     unconstrained boundary faces closed, so an outflow must be added explicitly).
     """
 
-    def __init__(self, mesh: GasMesh, inflow_faces=(), outflow_faces=()):
+    def __init__(self, mesh: GasMesh, inflow_faces=(), outflow_faces=(), pattern: StencilPattern | None = None):
         self.mesh = mesh
         n = mesh.cell_count
         interior = np.nonzero(mesh.interior)[0]
@@ -94,7 +136,7 @@ class UpwindConvectionOperator:
         # entries: (P,P,+F+), (P,N,+F-), (N,N,-F-), (N,P,-F+), outflow (P,P,+F)
         rows = np.concatenate([p, p, q, q, po])
         cols = np.concatenate([p, q, q, p, po])
-        self._indptr, self._indices, position = _csr_pattern(rows, cols, n)
+        self._indptr, self._indices, position = _pattern_of(rows, cols, n, pattern)
         nnz = len(self._indices)
         m = len(interior)
         k = len(self.outflow_faces)
@@ -110,13 +152,14 @@ class UpwindConvectionOperator:
         pi = mesh.face_cells[self.inflow_faces, 0]
         self._rhs_scatter = sp.csr_matrix((-np.ones(len(pi)), (pi, self.inflow_faces)), shape=(n, f_all))
 
+    def data(self, face_flux) -> np.ndarray:
+        """The CSR data array of the operator for face volume fluxes ``face_flux`` (F,)."""
+        return self._scatter_plus @ np.maximum(face_flux, 0.0) + self._scatter_minus @ np.minimum(face_flux, 0.0)
+
     def matrix(self, face_flux) -> sp.csr_matrix:
         """The operator for face volume fluxes ``face_flux`` (F,) [m^3/s] (or mass fluxes)."""
-        plus = np.maximum(face_flux, 0.0)
-        minus = np.minimum(face_flux, 0.0)
-        data = self._scatter_plus @ plus + self._scatter_minus @ minus
         n = self.mesh.cell_count
-        return sp.csr_matrix((data, self._indices, self._indptr), shape=(n, n))
+        return sp.csr_matrix((self.data(face_flux), self._indices, self._indptr), shape=(n, n))
 
     def rhs(self, face_flux, boundary_value_face) -> np.ndarray:
         """Right-hand side of the inflow faces: ``-F phi_b`` (F < 0 flows in)."""

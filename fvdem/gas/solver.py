@@ -41,7 +41,7 @@ import scipy.sparse.linalg as spla
 
 from .mesh import GasMesh, fipy_momentum_system, fipy_pressure_system
 from ..timing import Timings
-from .operators import DiffusionOperator, UpwindConvectionOperator, diagonal
+from .operators import DiffusionOperator, StencilPattern, UpwindConvectionOperator
 
 
 # under-relaxation of the predictor's deferred gradient correction (see ``gradient_correction``): the
@@ -134,8 +134,11 @@ class GasSolver:
                 if walls == "no-slip" or axis == c:
                     faces.append(b[side])
             self._velocity_dirichlet.append(np.concatenate(faces) if not self.periodic else np.zeros(0, int))
-        self._viscous = [DiffusionOperator(mesh, faces) for faces in self._velocity_dirichlet]
-        self._convection = UpwindConvectionOperator(mesh, inflow_faces=self._inlet, outflow_faces=self._outlet)
+        # the momentum operators share one pattern: a momentum matrix is then one data-array sum
+        self._stencil = StencilPattern(mesh)
+        self._viscous = [DiffusionOperator(mesh, faces, self._stencil) for faces in self._velocity_dirichlet]
+        self._convection = UpwindConvectionOperator(mesh, inflow_faces=self._inlet, outflow_faces=self._outlet,
+                                                    pattern=self._stencil)
         self._pressure_laplacian = DiffusionOperator(mesh, self._outlet)
         self._interior = np.nonzero(mesh.interior)[0]
         self._p = mesh.face_cells[self._interior, 0]
@@ -299,8 +302,10 @@ class GasSolver:
             return fipy_momentum_system(self.mesh, implicit_cell, mass_flux, gamma_face, boundary_value,
                                         self._velocity_dirichlet[component], self._outlet)
         viscous = self._viscous[component]
-        matrix = (diagonal(self.mesh, implicit_cell) + self._convection.matrix(mass_flux)
-                  - viscous.matrix(gamma_face)).tocsr()
+        stencil = self._stencil
+        implicit = np.broadcast_to(implicit_cell, self.mesh.cell_volumes.shape) * self.mesh.cell_volumes
+        matrix = stencil.matrix(stencil.diagonal_data(implicit) + self._convection.data(mass_flux)
+                                - viscous.data(gamma_face))
         rhs = self._convection.rhs(mass_flux, boundary_value) - viscous.rhs(gamma_face, boundary_value)
         return matrix, rhs
 
@@ -326,7 +331,7 @@ class GasSolver:
                 self._pressure_lu = None
         else:
             inverse_diagonal = 1.0 / matrix.diagonal()
-            preconditioner = spla.LinearOperator(matrix.shape, matvec=lambda x: inverse_diagonal * x)
+            preconditioner = spla.LinearOperator(matrix.shape, matvec=lambda x: inverse_diagonal * x, dtype=float)
             solution, info = spla.bicgstab(matrix, rhs, x0=guess, rtol=self.linear_tolerance, atol=0.0,
                                            M=preconditioner, maxiter=1000)
         if info != 0 or not np.all(np.isfinite(solution)):
@@ -343,7 +348,7 @@ class GasSolver:
                 or self._steps_since_factor >= self.refactor_interval):
             self.set_preconditioner_matrix(matrix.tocsc())
             self.factorizations += 1
-        return spla.LinearOperator(matrix.shape, matvec=self._pressure_lu.solve)
+        return spla.LinearOperator(matrix.shape, matvec=self._pressure_lu.solve, dtype=float)
 
     def set_preconditioner_matrix(self, matrix, steps_since_factor: int = 0) -> None:
         """Factorize ``matrix`` as the pressure preconditioner (also used to restore a checkpoint:
