@@ -41,6 +41,7 @@ import scipy.sparse.linalg as spla
 
 from .mesh import GasMesh, fipy_momentum_system, fipy_pressure_system
 from ..timing import Timings
+from .krylov import bicgstab_jacobi
 from .operators import DiffusionOperator, StencilPattern, UpwindConvectionOperator
 
 
@@ -316,8 +317,8 @@ class GasSolver:
         return self._pressure_laplacian.matrix(gamma_face)
 
     def _solve(self, matrix, rhs, guess, symmetric_negative=False):
-        """Linear solve: direct (``linear_solver='direct'``) or warm-started Krylov: BiCGStab with a
-        Jacobi preconditioner for momentum, CG preconditioned by a recent factorization for the
+        """Linear solve: direct (``linear_solver='direct'``) or warm-started Krylov: compiled BiCGStab
+        with a Jacobi preconditioner for momentum (``krylov.bicgstab_jacobi``), CG preconditioned by a recent factorization for the
         negative-definite pressure Laplacian."""
         if self.linear_solver == "direct":
             return spla.spsolve(matrix.tocsc(), rhs)
@@ -329,11 +330,11 @@ class GasSolver:
                                      M=preconditioner, maxiter=1000, callback=lambda x: count.__setitem__(0, count[0] + 1))
             if count[0] > 25:  # the stored factorization has drifted too far from the current matrix
                 self._pressure_lu = None
-        else:
-            inverse_diagonal = 1.0 / matrix.diagonal()
-            preconditioner = spla.LinearOperator(matrix.shape, matvec=lambda x: inverse_diagonal * x, dtype=float)
-            solution, info = spla.bicgstab(matrix, rhs, x0=guess, rtol=self.linear_tolerance, atol=0.0,
-                                           M=preconditioner, maxiter=1000)
+        else:  # compiled Jacobi-BiCGStab (fvdem/gas/krylov.py)
+            matrix = sp.csr_matrix(matrix)
+            solution = np.array(guess, dtype=float)
+            info, _ = bicgstab_jacobi(matrix.indptr, matrix.indices, matrix.data, np.ascontiguousarray(rhs, float),
+                                      solution, self.linear_tolerance, 1000)
         if info != 0 or not np.all(np.isfinite(solution)):
             self.direct_fallbacks += 1  # Krylov stalled (e.g. a convection-dominated step): solve directly
             return spla.spsolve(matrix.tocsc(), rhs)  # the same (possibly sign-flipped) system
