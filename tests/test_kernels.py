@@ -150,3 +150,16 @@ def test_exchange_terms_equal_numpy_response_and_deposition():
                                               weights, np.zeros(count), np.zeros((count, 3)))
         assert_close(beta, beta_expected)
         assert_close(source, source_ref)
+
+
+@pytest.mark.parametrize("laws", list(closures.FUSED))
+def test_fused_set_equals_its_laws_one_by_one(laws):
+    drag, lift, torque = laws
+    particle = closures.ParticleShape(3.2e-3, 12.8e-3, *AIR)
+    slip, voidage, axis = inputs()
+    voidage = np.maximum(voidage, 0.65)  # within the fitted solids fractions
+    fused = closures.evaluate_set(particle, drag, lift, torque, slip, voidage, axis)
+    for kind, name, value in zip(("drag", "lift", "torque"), laws, fused):
+        law = closures.law(kind, name)
+        assert np.array_equal(value, law.evaluate(particle, slip, voidage, axis))  # the same expressions
+        assert_close(value, law.function(particle, slip, voidage, axis))

@@ -76,6 +76,11 @@ class HydrodynamicModel:
         """Lift [N] (N, 3), or None when the model has none."""
         return closures.law("lift", self.lift).evaluate(self.particle, slip, voidage, axis)
 
+    def evaluate(self, slip, voidage, axis):
+        """``(c, lift, torque)`` of the model's laws (lift/torque None when 'none'), one fused kernel pass
+        where the set has one (``closures.FUSED``)."""
+        return closures.evaluate_set(self.particle, self.drag, self.lift, self.torque, slip, voidage, axis)
+
     def hydrodynamic_torque(self, slip, voidage, axis):
         """Hydrodynamic torque [N m] (N, 3), or None when the model has none."""
         return closures.law("torque", self.torque).evaluate(self.particle, slip, voidage, axis)
@@ -166,12 +171,12 @@ class CouplingBridge:
             out = grid_map.scatter(values)
             deposited += clock() - t
             return out
-        eps_p = np.clip(grid_map.gather(eps), cfg.minimum_voidage, 1.0)
+        # voidage and gas velocity at the particles in one pass over the weights
+        at_particles = grid_map.gather(np.column_stack([eps, s.flux_velocity()]))
+        eps_p = np.clip(at_particles[:, 0], cfg.minimum_voidage, 1.0)
         velocity = np.zeros_like(p.velocity) if self.fixed else p.velocity
-        slip = grid_map.gather(s.flux_velocity()) - velocity
-        c = self.model.drag_coefficient(slip, eps_p, p.axis)
-        lift = self.model.lift_force(slip, eps_p, p.axis)
-        torque = self.model.hydrodynamic_torque(slip, eps_p, p.axis)
+        slip = at_particles[:, 1:] - velocity
+        c, lift, torque = self.model.evaluate(slip, eps_p, p.axis)
         volume_cells = mesh.cell_volumes[:, None]
         explicit_drag = None
         if not self.semi_implicit:
@@ -193,11 +198,13 @@ class CouplingBridge:
         t_gas = clock()
         gas.step()
         t_after_gas = clock()
-        fluid_velocity = grid_map.gather(s.flux_velocity())
+        fields = [s.flux_velocity()] + ([s.pressure_gradient()] if cfg.pressure_gradient_force else [])
+        at_particles = grid_map.gather(np.column_stack(fields))  # one pass for both
+        fluid_velocity = np.ascontiguousarray(at_particles[:, :3])
         external = np.zeros_like(slip)
         volume = self.particle_volume()[:, None]
         if cfg.pressure_gradient_force:
-            external -= volume * grid_map.gather(s.pressure_gradient())
+            external -= volume * at_particles[:, 3:]
         if np.any(gas.mean_pressure_gradient):  # an imposed mean gradient acts on both phases
             external += volume * gas.mean_pressure_gradient
         pressure_force = external.sum(axis=0)

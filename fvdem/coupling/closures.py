@@ -435,6 +435,33 @@ def register(kind, name, *, shapes=("sphere", "spherocylinder"), aspect_ratio=No
     return decorate
 
 
+# Fused kernels: a (drag, lift, torque) set evaluated in one pass over the particles (``kernels.py``),
+# used by the bridge instead of the three kernels one by one when the case chooses that set.
+FUSED: dict[tuple, str] = {}
+
+
+def register_fused(drag: str, lift: str, torque: str, kernel: str) -> None:
+    """Register ``kernel(slip, voidage, axis, shape, c, lift, torque)`` of ``kernels.py`` for the set."""
+    FUSED[(drag, lift, torque)] = kernel
+
+
+def evaluate_set(particle: "ParticleShape", drag: str, lift: str, torque: str, slip, voidage, axis):
+    """Drag coefficient, lift and torque (None where the law is 'none') of a set of laws: one fused
+    kernel when the set has one, else each law's ``Law.evaluate``."""
+    fused = FUSED.get((drag, lift, torque))
+    if fused is None:
+        return (law("drag", drag).evaluate(particle, slip, voidage, axis),
+                law("lift", lift).evaluate(particle, slip, voidage, axis),
+                law("torque", torque).evaluate(particle, slip, voidage, axis))
+    from . import kernels
+    slip = np.ascontiguousarray(np.atleast_2d(slip), dtype=float)
+    n = len(slip)
+    voidage = np.ascontiguousarray(np.broadcast_to(np.asarray(voidage, float), (n,)))
+    axis = np.ascontiguousarray(np.broadcast_to(np.asarray(axis, float), (n, 3)))
+    return getattr(kernels, fused)(slip, voidage, axis, particle.kernel_args, np.empty(n), np.empty((n, 3)),
+                                   np.empty((n, 3)))
+
+
 def law(kind: str, name: str) -> Law:
     try:
         return LAWS[kind][name]
@@ -575,3 +602,5 @@ for _kind, _single, _multi in (("lift", single_particle_lift, multi_particle_lif
              validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",
              reference="Sanjeevi & Padding (2020), AIChE J. 66",
              summary="Sanjeevi-Padding 2020 (multi-particle, AR-4)", kernel=f"sanjeevi_padding_{_kind}")(_oriented(_multi))
+
+register_fused("sanjeevi-padding", "sanjeevi-padding", "sanjeevi-padding", "sanjeevi_padding_all")

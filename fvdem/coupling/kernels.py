@@ -380,3 +380,35 @@ def exchange_terms(mass, c, velocity, force, gravity, lift, substep, substeps, d
             for d in range(3):
                 source_out[cell, d] += partial[chunk, cell, d + 1]
     return beta_out, source_out
+
+
+# --------------------------------------------------------------------------- fused closure sets
+@njit(cache=True, parallel=True)
+def sanjeevi_padding_all(slip, voidage, axis, shape, c_out, lift_out, torque_out):
+    """Sanjeevi & Padding's drag, lift and torque in one pass (``closures.FUSED``): the three kernels
+    above share the slip speed, Re, incidence and the drag at 0 and 90 degrees; the same expressions,
+    so the same numbers as ``sanjeevi_padding_drag``, ``_lift`` and ``_torque`` one by one."""
+    for i in numba.prange(slip.shape[0]):
+        speed = _speed(slip, i)
+        eps = voidage[i]
+        es = 1.0 - eps
+        re = _reynolds(speed, eps, shape)
+        cos2 = _cos2(slip, axis, i, speed)
+        f0 = _sp_drag_at(re, es, 0)
+        f90 = _sp_drag_at(re, es, 1)
+        c_out[i] = 3 * np.pi * shape[MU] * shape[D_P] * eps * (f0 + (f90 - f0) * (1.0 - cos2))
+        phi = math.acos(math.sqrt(cos2))
+        f_l = (f90 - f0) * math.sin(phi) * math.cos(phi)
+        magnitude = 3 * np.pi * shape[MU] * shape[D_P] * eps * speed * f_l
+        _lift_direction(slip, axis, i, lift_out)
+        for k in range(3):
+            lift_out[i, k] *= magnitude
+        isolated = _zastawny(re, np.pi / 4, Z_TORQUE) * re / 16.0
+        t_mag = (isolated * (1 - es) ** 2
+                 + re ** SP_TORQUE[0] * es ** SP_TORQUE[1] * (SP_TORQUE[2] * (1 - es) + SP_TORQUE[3] * es ** 3 / (1 - es))
+                 + SP_TORQUE[4] * es * (1 - es) ** 2 * re)
+        magnitude = 2 * np.pi * shape[MU] * shape[D_P] ** 2 * eps * speed * t_mag * math.sin(phi) * math.cos(phi)
+        _torque_direction(slip, axis, i, torque_out)
+        for k in range(3):
+            torque_out[i, k] *= magnitude
+    return c_out, lift_out, torque_out
