@@ -238,30 +238,89 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
 
 
 # --------------------------------------------------------------------------- the scheduler side
-def make_client(study: Study, scheduler: str | None, workers: int | None, threads: int):
-    """A Dask client: on ``scheduler``, on the study's dask-jobqueue ``[cluster]``, or on a LocalCluster
-    of ``workers`` processes (default: cores / threads)."""
+def make_client(cluster: dict | None, scheduler: str | None, workers: int | None, threads: int):
+    """A Dask client: on ``scheduler``, on a dask-jobqueue ``cluster`` table (a study's ``[cluster]``), or on
+    a LocalCluster of ``workers`` processes (default: cores / threads). Returns ``(client, description)``."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:  # pragma: no cover - a dependency
         raise CaseError(["fvdem study needs Dask distributed: pip install 'dask[distributed]'"]) from None
     if scheduler:
         return Client(scheduler), scheduler
-    options = {k: v for k, v in study.cluster.items() if k not in ("kind", "workers")}
-    kind = study.cluster.get("kind", "local")
-    count = workers or study.cluster.get("workers") or max(1, (os.cpu_count() or 1) // max(1, threads))
+    cluster = cluster or {}
+    options = {k: v for k, v in cluster.items() if k not in ("kind", "workers")}
+    kind = cluster.get("kind", "local")
+    count = workers or cluster.get("workers") or max(1, (os.cpu_count() or 1) // max(1, threads))
     if kind == "local":
-        cluster = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=None,
-                               **options)
-        return Client(cluster), f"LocalCluster({count} workers x {threads} numba threads)"
+        local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=None,
+                             **options)
+        return Client(local), f"LocalCluster({count} workers x {threads} numba threads)"
     try:
         import dask_jobqueue
     except ImportError:
         raise CaseError([f"cluster.kind = {kind!r}: needs dask-jobqueue (pip install dask-jobqueue)"]) from None
     cluster_class = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster"}[kind]
-    cluster = getattr(dask_jobqueue, cluster_class)(**options)
-    cluster.scale(jobs=count)
-    return Client(cluster), f"{cluster_class}({count} jobs)"
+    jobs = getattr(dask_jobqueue, cluster_class)(**options)
+    jobs.scale(jobs=count)
+    return Client(jobs), f"{cluster_class}({count} jobs)"
+
+
+def close_client(client) -> None:
+    client.close()
+    cluster = getattr(client, "cluster", None)
+    if cluster is not None:
+        cluster.close()
+
+
+def progress_line(done: int, total: int, name: str, status: str, detail: str, started: float,
+                  work_done: float | None = None, work_total: float | None = None, unit: str = "") -> str:
+    """One line of a sweep's progress view: tasks done, the work done (e.g. simulated seconds) and an ETA
+    from the rate so far."""
+    elapsed = time.perf_counter() - started
+    done_work, total_work = (done, total) if work_done is None else (work_done, work_total)
+    eta = elapsed / done_work * (total_work - done_work) if done_work else math.nan
+    work = f"{done_work:.4g} of {total_work:.4g}{unit} done, " if work_done is not None else ""
+    return (f"[{done}/{total}] {name}: {status}" + (f" ({detail})" if detail else "")
+            + f"; {work}{elapsed:.0f} s wall, ETA {eta:.0f} s")
+
+
+def _guarded(function, item, threads):
+    """A sweep task: ``function(item, threads)``, its failure returned with the cause instead of raised."""
+    started = time.perf_counter()
+    try:
+        value = function(item, threads)
+    except Exception as exc:  # noqa: BLE001  (one failed point is reported, the others go on)
+        return {"status": "failed", "error": f"{type(exc).__name__}: {exc}", "value": None,
+                "wall_seconds": time.perf_counter() - started}
+    return {"status": "finished", "error": None, "value": value, "wall_seconds": time.perf_counter() - started}
+
+
+def map_tasks(function, items, names, *, threads=1, scheduler=None, workers=None, cluster=None, log=print) -> list:
+    """The engine under every sweep that is not a study of case files (the tools' fractions, variants
+    and ramps): ``function(item, threads)`` for each item, each a task on the same Dask clients as
+    ``fvdem study`` (``scheduler``, a dask-jobqueue ``cluster`` table, or a LocalCluster of ``workers``),
+    one progress line per finished task. Returns, in the items' order, ``{"name", "status"
+    ("finished" or "failed"), "value", "error", "wall_seconds"}``: a failure does not stop the others.
+    ``function`` must be importable or picklable (a tool's module-level function is)."""
+    from distributed import as_completed
+    names = [str(n) for n in names]
+    if len(set(names)) != len(names):
+        raise ValueError("map_tasks: task names must be distinct")
+    started = time.perf_counter()
+    client, description = make_client(cluster, scheduler, workers, threads)
+    log(f"{len(names)} tasks on {description}")
+    results = {}
+    try:
+        futures = {client.submit(_guarded, function, item, threads, key=f"task-{name}", pure=False): name
+                   for item, name in zip(items, names)}
+        for done, future in enumerate(as_completed(list(futures)), 1):
+            name = futures[future]
+            result = dict(future.result(), name=name)
+            results[name] = result
+            log(progress_line(done, len(names), name, result["status"], result["error"] or "", started))
+    finally:
+        close_client(client)
+    return [results[name] for name in names]
 
 
 def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print) -> dict:
@@ -271,7 +330,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.toml").write_text(Path(study.path).read_text())
     started = time.perf_counter()
-    client, description = make_client(study, scheduler, workers, threads)
+    client, description = make_client(study.cluster, scheduler, workers, threads)
     try:
         beds = {b.name: client.submit(prepare_bed, b, threads, key=f"bed-{b.name}", pure=False) for b in study.beds}
         futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"run-{r.name}",
@@ -288,17 +347,11 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                           "error": f"{type(exc).__name__}: {exc}", "simulated_seconds": 0.0, "point": run.point}
             results.append(result)
             done += study.duration if result["status"] != "failed" else 0.0
-            elapsed = time.perf_counter() - started
-            eta = elapsed / done * (total - done) if done else math.nan
             detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None else "t95 -")
-            log(f"[{len(results)}/{len(futures)}] {result['name']}: {result['status']} ({detail}); simulated "
-                f"{done:.4g} of {total:.4g} s, {elapsed:.0f} s wall, ETA {eta:.0f} s" if done else
-                f"[{len(results)}/{len(futures)}] {result['name']}: {result['status']} ({detail})")
+            log(progress_line(len(results), len(futures), result["name"], result["status"], detail, started,
+                              done, total, " simulated s"))
     finally:
-        client.close()
-        cluster = getattr(client, "cluster", None)
-        if cluster is not None:
-            cluster.close()
+        close_client(client)
     order = {r.name: k for k, r in enumerate(study.runs)}
     results.sort(key=lambda r: order[r["name"]])
     summary = {"study": study.name, "scheduler": description, "runs": results,

@@ -177,3 +177,41 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert close["verdict"] == "open" and "too noisy" in close["why"]
     slower = check_findings([row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 4.0)])[0]
     assert slower["verdict"] == "does not hold"
+
+
+def _square_or_fail(item, threads):
+    if item < 0:
+        raise ValueError(f"negative item {item}")
+    return {"square": item * item, "threads": threads}
+
+
+def test_the_sweep_engine_runs_tasks_in_order_and_reports_a_failure_without_stopping_the_others():
+    from fvdem.study import map_tasks
+    lines = []
+    outcomes = map_tasks(_square_or_fail, [3, -1, 4], ["a", "b", "c"], threads=1, workers=1, log=lines.append)
+    assert [o["name"] for o in outcomes] == ["a", "b", "c"]
+    assert [o["status"] for o in outcomes] == ["finished", "failed", "finished"]
+    assert outcomes[0]["value"] == {"square": 9, "threads": 1} and outcomes[2]["value"]["square"] == 16
+    assert outcomes[1]["value"] is None and outcomes[1]["error"] == "ValueError: negative item -1"
+    assert lines[0] == "3 tasks on LocalCluster(1 workers x 1 numba threads)"
+    assert len(lines) == 4 and all("ETA" in line for line in lines[1:])
+    with pytest.raises(ValueError, match="distinct"):
+        map_tasks(_square_or_fail, [1, 2], ["x", "x"], workers=1)
+
+
+def test_the_tools_sweeps_run_module_level_functions_the_engine_can_ship():
+    """validate_hindered_settling's fractions, speed_accuracy's variants and validate_umf's ramps are
+    tasks of fvdem.study.map_tasks: their task functions are module-level (workers import them)."""
+    import importlib
+    import pickle
+    sys.path.insert(0, str(ROOT / "tools"))
+    try:
+        for module, name in (("validate_hindered_settling", "run_one"), ("speed_accuracy", "measure_task"),
+                             ("validate_umf", "ramp")):
+            tool = importlib.import_module(module)
+            function = getattr(tool, name)
+            assert pickle.loads(pickle.dumps(function)) is function
+            assert "map_tasks" in Path(tool.__file__).read_text()
+            assert "ProcessPoolExecutor" not in Path(tool.__file__).read_text()
+    finally:
+        sys.path.remove(str(ROOT / "tools"))

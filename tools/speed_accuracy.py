@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -137,6 +138,20 @@ def measure(case, spin, window, sample, entropy_times):
             "void_fraction_histogram": (counts / counts.sum()).tolist()}
 
 
+_WARM: set = set()  # shapes whose kernels this process has loaded
+
+
+def measure_task(spec, _threads=None):
+    """One variant as a sweep task: ``spec = (shape, particles, overrides, threads, spin, window, sample,
+    entropy_times)``. The first task of a shape in a worker loads (or compiles) the kernels on a
+    50-particle bed first, so that no measured run pays for it."""
+    shape, particles, overrides, threads, spin, window, sample, entropy_times = spec
+    if shape not in _WARM:
+        fvdem.Simulation(build_case(shape, 50, {}, threads)).run(2e-3)
+        _WARM.add(shape)
+    return measure(build_case(shape, particles, overrides, threads), spin, window, sample, entropy_times)
+
+
 def errors_against(run, ref):
     return {"pressure_drop": abs(run["pressure_drop_over_weight"] / ref["pressure_drop_over_weight"] - 1.0),
             "bed_height": abs(run["mean_height"] / ref["mean_height"] - 1.0),
@@ -168,6 +183,9 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="1,000 particles, 0.3 s runs, fewer variants")
     parser.add_argument("--particles", type=int, default=None)
     parser.add_argument("--threads", type=int, default=2, help="threads of every run but 'threads-1'")
+    parser.add_argument("--workers", type=int, default=1, help="Dask workers (LocalCluster); more than 1 puts timed "
+                        "runs side by side on this machine, so only on a cluster of separate nodes")
+    parser.add_argument("--scheduler", help="address of a running Dask scheduler to send the variants to")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--from-json", metavar="FILE", help="redraw the chart and choose the default again from a "
@@ -181,32 +199,36 @@ def main(argv=None):
     spin, window, sample = (0.1, 0.2, 0.01) if args.quick else (0.3, 0.7, 0.01)
     entropy_times = [0.1, 0.2, 0.3] if args.quick else [0.25, 0.5, 0.75, 1.0]
     wall0 = time.perf_counter()
-    # load (or compile) the kernels once so that no run pays for it
-    for shape in args.shapes:
-        fvdem.Simulation(build_case(shape, 50, {}, args.threads)).run(2e-3)
-
     budget = dict(BUDGET)
-    points, runs = [], {}
+    # every variant is a task on fvdem's sweep engine (fvdem.study.map_tasks, the Dask clients of fvdem
+    # study); one worker by default, so that no two timed runs share the cores
+    specs, labels, descriptions = [], [], []
     for shape in args.shapes:
         for name, overrides, what in variants(shape, args.quick):
             threads = overrides.get("run.threads", args.threads)
-            label = f"{'AR-1' if shape == 'sphere' else 'AR-4'} {name}"
-            point = {"variant": name, "label": label, "shape": shape, "changes": what,
-                     "settings": {k: v for k, v in overrides.items() if k != "particles.insertion.seed"}}
-            try:
-                run = measure(build_case(shape, particles, overrides, threads), spin, window, sample, entropy_times)
-            except SimulationError as exc:
-                point.update(failed=True, reason=str(exc))
-                points.append(point)
-                print(f"{label:32s} failed: {exc}", flush=True)
-                continue
-            runs[label] = run
-            point.update({k: run[k] for k in ("wall_seconds_per_simulated_second", "cpu_seconds_per_simulated_second",
-                                              "threads", "pressure_drop_over_weight", "mean_height", "mixing_entropy")})
+            specs.append((shape, particles, overrides, threads, spin, window, sample, entropy_times))
+            labels.append(f"{'AR-1' if shape == 'sphere' else 'AR-4'} {name}")
+            descriptions.append((shape, name, overrides, what))
+    from fvdem.study import map_tasks
+    outcomes = map_tasks(measure_task, specs, labels, scheduler=args.scheduler, workers=args.workers,
+                         log=lambda line: print(line, file=sys.stderr, flush=True))
+    points, runs = [], {}
+    for label, (shape, name, overrides, what), outcome in zip(labels, descriptions, outcomes):
+        point = {"variant": name, "label": label, "shape": shape, "changes": what,
+                 "settings": {k: v for k, v in overrides.items() if k != "particles.insertion.seed"}}
+        if outcome["status"] == "failed":
+            point.update(failed=True, reason=outcome["error"])
             points.append(point)
-            print(f"{label:32s} {run['wall_seconds_per_simulated_second']:7.1f} s wall per simulated s "
-                  f"(CPU {run['cpu_seconds_per_simulated_second']:.1f}); dP/W {run['pressure_drop_over_weight']:.3f}, "
-                  f"mean height {run['mean_height'] * 100:.2f} cm", flush=True)
+            print(f"{label:32s} failed: {outcome['error']}", flush=True)
+            continue
+        run = runs[label] = outcome["value"]
+        point.update({k: run[k] for k in ("wall_seconds_per_simulated_second", "cpu_seconds_per_simulated_second",
+                                          "threads", "pressure_drop_over_weight", "mean_height", "mixing_entropy")})
+        points.append(point)
+        print(f"{label:32s} {run['wall_seconds_per_simulated_second']:7.1f} s wall per simulated s "
+              f"(CPU {run['cpu_seconds_per_simulated_second']:.1f}); dP/W {run['pressure_drop_over_weight']:.3f}, "
+              f"mean height {run['mean_height'] * 100:.2f} cm", flush=True)
+    for shape in args.shapes:
         ref = runs[f"{'AR-1' if shape == 'sphere' else 'AR-4'} reference"]
         ref_wall = ref["wall_seconds_per_simulated_second"]
         for point in points:

@@ -24,9 +24,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
@@ -102,7 +101,9 @@ def main(argv=None):
     group.add_argument("--ga-e", type=float, help="Galileo number on d_e")
     parser.add_argument("--fractions", type=float, nargs="+", default=list(FRACTIONS))
     parser.add_argument("--duration", type=float, default=20.0, help="viscous times d^2/nu per run")
-    parser.add_argument("--jobs", type=int, default=2, help="runs in parallel (each on one thread)")
+    parser.add_argument("--jobs", "--workers", type=int, default=2, dest="jobs",
+                        help="runs in parallel on a Dask LocalCluster (each on one thread)")
+    parser.add_argument("--scheduler", help="address of a running Dask scheduler to send the runs to")
     parser.add_argument("--quick", action="store_true", help="three fractions, 6 viscous times (a smoke run)")
     from fvdem.coupling.closures import law_names
     parser.add_argument("--drag", choices=tuple(n for n in law_names("drag") if n != "none"),
@@ -122,8 +123,15 @@ def main(argv=None):
     wall0 = time.perf_counter()
     tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration, drag=args.drag)
               for phi in args.fractions]
-    with ProcessPoolExecutor(max_workers=max(1, args.jobs), mp_context=get_context("spawn")) as pool:
-        results = list(pool.map(run_one, tables, [1] * len(tables)))
+    # one task per fraction on fvdem's sweep engine (the Dask clients of fvdem study)
+    from fvdem.study import map_tasks
+    outcomes = map_tasks(run_one, tables, [f"phi={phi:g}" for phi in args.fractions], threads=1,
+                         scheduler=args.scheduler, workers=max(1, args.jobs),
+                         log=lambda line: print(line, file=sys.stderr, flush=True))
+    failed = [f"{o['name']}: {o['error']}" for o in outcomes if o["status"] == "failed"]
+    if failed:
+        raise SystemExit("validate_hindered_settling: runs failed: " + "; ".join(failed))
+    results = [o["value"] for o in outcomes]
     for phi, r in zip(args.fractions, results):
         print(f"<phi> = {phi:<5g} ({r['particles']} particles): Re = {r['slip_reynolds']:.3f} +- "
               f"{r['slip_reynolds_standard_error']:.3f} over {r['window_start']:.2f}-{r['window_end']:.2f} s; "

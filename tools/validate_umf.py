@@ -18,6 +18,11 @@ repeats the ramp with Gidaspow's closure (Ergun / Wen-Yu) instead of seed 000's.
 
     python tools/validate_umf.py --shape sphere --json
     python tools/validate_umf.py --shape spherocylinder --closures mp --json
+    python tools/validate_umf.py --shape sphere spherocylinder --drag paper beetstra --workers 2 --threads 1 --json
+
+Several shapes or drag laws give one ramp each, run as tasks on fvdem's sweep engine (the Dask
+clients of ``fvdem study``: ``--workers`` for a LocalCluster, ``--scheduler`` for a running one); each
+ramp stays sequential. The last line is then ``{"ramps": [...], "plot": ..., "wall_seconds": ...}``.
 
 Prints progress, writes ``umf_<shape>[_<closures>].png`` (pressure drop over weight against U)
 and, as the last line, one JSON object.
@@ -26,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -137,52 +143,33 @@ def fit_umf(velocity, drop, weight, umf_experiment):
     return plateau, branch_crossing(a, b, plateau), (float(a), float(b))
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--shape", choices=("sphere", "spherocylinder"), default="sphere")
-    parser.add_argument("--closures", choices=("sp", "mp"), default="mp", help="AR-4 closures (ignored for spheres)")
-    parser.add_argument("--particles", type=int, default=2000)
-    parser.add_argument("--hold", type=float, default=0.25, help="seconds at each velocity")
-    parser.add_argument("--start", type=float, default=0.5, help="seconds fluidized before the ramp")
-    parser.add_argument("--quick", action="store_true", help="500 particles, short holds (a smoke test)")
-    parser.add_argument("--threads", type=int, default=0)
-    parser.add_argument("--width", type=float, default=0.06, help="column width [m] (a multiple of the 15 mm cells); "
-                        "scale --particles with the cross-section to keep the bed height")
-    parser.add_argument("--settings", choices=tuple(SETTINGS), default="paper",
-                        help="contact stiffness, DEM and CFD steps: seed 000's or fvdem's defaults")
-    parser.add_argument("--drag", choices=("paper",) + tuple(n for n in law_names("drag") if n != "none"),
-                        default="paper", help="drag closure: seed 000's (Hoelzer-Sommerfeld + Di Felice, or "
-                        "Sanjeevi-Padding for --closures mp) or any registered law (fvdem laws drag), lift and "
-                        "torque kept")
-    parser.add_argument("--out", default=".")
-    parser.add_argument("--json", action="store_true")
-    parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
-                        help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
-    args = parser.parse_args(argv)
-    if args.combine:
-        print(_combined_plot(Path(args.out) / "umf_compare.png", args.combine))
-        return
-    if args.quick:
-        args.particles, args.hold, args.start = 500, 0.06, 0.15
-    Path(args.out).mkdir(parents=True, exist_ok=True)  # before the ramp: its chart must not fail after it
+def ramp(spec, threads=None):
+    """One defluidization ramp (sequential by nature): ``spec`` a dict of this tool's options (shape,
+    closures, particles, threads, width, settings, drag, hold, start, quick, out). Returns the result
+    object (see the module docstring). A module-level function, so that the sweep engine can run
+    several ramps as tasks."""
+    o = dict(spec)
     wall0, cpu0 = time.perf_counter(), time.process_time()
-    shape = args.shape
+    shape = o["shape"]
     umf_exp = EXPERIMENT[shape]
-    case = build_case(shape, args.closures, args.particles, args.threads, args.width, args.settings, args.drag)
+    case = build_case(shape, o["closures"], o["particles"], o["threads"], o["width"], o["settings"], o["drag"])
     sim = fvdem.Simulation(case)
     weight = weight_per_area(sim.model)
-    sim.run(args.start)
+    sim.run(o["start"])
     ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
-    if args.quick:
+    if o["quick"]:
         ratios = [2.0, 1.3, 1.0, 0.7, 0.4]
+    tag = shape if shape == "sphere" else f"{shape}_{o['closures']}"
+    if o["drag"] != "paper":
+        tag += f"_{o['drag']}"
     curve = []
     for ratio in ratios:
         u = ratio * umf_exp
         sim.gas.solver.set_inlet_velocity(u)
-        drop, spread = mean_pressure_drop(sim, args.hold)
+        drop, spread = mean_pressure_drop(sim, o["hold"])
         curve.append({"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
                       "over_weight": drop / weight})
-        print(f"U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {drop:.1f} Pa = {drop / weight:.3f} W/A "
+        print(f"{tag}: U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {drop:.1f} Pa = {drop / weight:.3f} W/A "
               f"(+- {spread:.1f})", flush=True)
     velocity = [c["velocity"] for c in curve]
     drop = [c["pressure_drop"] for c in curve]
@@ -194,13 +181,10 @@ def main(argv=None):
     phi = float(sphericities(p.diameter, p.length or p.diameter, 0.0)[0])
     packing = packed_state(sim)
     closure_umf = uniform_bed_umf(sim.bridge.model, 1.0 - packing["solids_fraction"], packing["axes"], p.density)
-    tag = shape if shape == "sphere" else f"{shape}_{args.closures}"
-    if args.drag != "paper":
-        tag += f"_{args.drag}"
-    png = Path(args.out) / f"umf_{tag}.png"
+    png = Path(o["out"]) / f"umf_{tag}.png"
     _plot(png, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag)
-    result = {
-        "shape": shape, "closures": None if shape == "sphere" else args.closures,
+    return {
+        "shape": shape, "closures": None if shape == "sphere" else o["closures"],
         "umf_simulated": umf, "umf_experiment": umf_exp,
         "relative_error": None if umf is None else (umf - umf_exp) / umf_exp,
         "plateau_over_weight": plateau / weight,
@@ -212,14 +196,72 @@ def main(argv=None):
         "axis_sin2_from_vertical": packing["sin2"],
         "umf_closure_uniform_bed": closure_umf,
         "umf_ergun_at_packed_voidage": ergun_umf(d_p, p.density, 1.0 - packing["solids_fraction"], phi),
-        "bed": f"{p.count} particles in a {args.width:g} x {args.width:g} m column, 15 mm cells, packed height "
+        "bed": f"{p.count} particles in a {o['width']:g} x {o['width']:g} m column, 15 mm cells, packed height "
                f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
                "property of particles and gas)",
-        "settings": args.settings,
-        "hold_seconds": args.hold, "curve": curve, "plot": str(png),
+        "settings": o["settings"],
+        "hold_seconds": o["hold"], "curve": curve, "plot": str(png),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
     }
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--shape", nargs="+", choices=("sphere", "spherocylinder"), default=["sphere"],
+                        help="one ramp per shape (and per --drag law)")
+    parser.add_argument("--closures", choices=("sp", "mp"), default="mp", help="AR-4 closures (ignored for spheres)")
+    parser.add_argument("--particles", type=int, default=2000)
+    parser.add_argument("--hold", type=float, default=0.25, help="seconds at each velocity")
+    parser.add_argument("--start", type=float, default=0.5, help="seconds fluidized before the ramp")
+    parser.add_argument("--quick", action="store_true", help="500 particles, short holds (a smoke test)")
+    parser.add_argument("--threads", type=int, default=0)
+    parser.add_argument("--width", type=float, default=0.06, help="column width [m] (a multiple of the 15 mm cells); "
+                        "scale --particles with the cross-section to keep the bed height")
+    parser.add_argument("--settings", choices=tuple(SETTINGS), default="paper",
+                        help="contact stiffness, DEM and CFD steps: seed 000's or fvdem's defaults")
+    parser.add_argument("--drag", nargs="+", choices=("paper",) + tuple(n for n in law_names("drag") if n != "none"),
+                        default=["paper"], help="drag closure(s): seed 000's (Hoelzer-Sommerfeld + Di Felice, or "
+                        "Sanjeevi-Padding for --closures mp) or any registered law (fvdem laws drag), lift and "
+                        "torque kept; several give one ramp each")
+    parser.add_argument("--workers", type=int, default=1, help="ramps side by side (several ramps only): Dask "
+                        "LocalCluster workers, each ramp on --threads threads")
+    parser.add_argument("--scheduler", help="address of a running Dask scheduler to send the ramps to")
+    parser.add_argument("--out", default=".")
+    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
+                        help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
+    args = parser.parse_args(argv)
+    if args.combine:
+        print(_combined_plot(Path(args.out) / "umf_compare.png", args.combine))
+        return
+    if args.quick:
+        args.particles, args.hold, args.start = 500, 0.06, 0.15
+    Path(args.out).mkdir(parents=True, exist_ok=True)  # before the ramp: its chart must not fail after it
+    specs = [{"shape": shape, "closures": args.closures, "particles": args.particles, "threads": args.threads,
+              "width": args.width, "settings": args.settings, "drag": drag, "hold": args.hold, "start": args.start,
+              "quick": args.quick, "out": str(Path(args.out).resolve())}
+             for shape in args.shape for drag in args.drag]
+    if len(specs) == 1:  # one ramp: in this process, its output as before
+        result = ramp(specs[0])
+        print(json.dumps(result) if args.json else json.dumps(result, indent=2))
+        return
+    # several ramps: tasks on fvdem's sweep engine (the Dask clients of fvdem study); each stays sequential
+    from fvdem.study import map_tasks
+    wall0 = time.perf_counter()
+    names = [f"{s['shape']}-{s['drag']}" for s in specs]
+    outcomes = map_tasks(ramp, specs, names, threads=args.threads, scheduler=args.scheduler, workers=args.workers,
+                         log=lambda line: print(line, file=sys.stderr, flush=True))
+    for name, outcome in zip(names, outcomes):
+        if outcome["status"] == "failed":
+            print(f"{name}: failed: {outcome['error']}", flush=True)
+    result = {"ramps": [dict(o["value"], name=o["name"]) if o["value"] else {"name": o["name"], "error": o["error"]}
+                        for o in outcomes], "wall_seconds": time.perf_counter() - wall0}
+    if all(o["value"] for o in outcomes):
+        result["plot"] = str(_combined_plot(Path(args.out) / "umf_compare.png", None,
+                                            results=[o["value"] for o in outcomes]))
     print(json.dumps(result) if args.json else json.dumps(result, indent=2))
+    if any(o["status"] == "failed" for o in outcomes):
+        raise SystemExit(1)
 
 
 def packed_state(sim):
@@ -228,22 +270,26 @@ def packed_state(sim):
     return bed_packing(sim.particles, box.lower, box.upper, box.periodic)
 
 
-def _combined_plot(path, outputs):
+def _combined_plot(path, outputs, results=None):
     """Pressure drop / (W/A) against U / Umf,experiment of several ramps on one chart, each with its
-    simulated Umf (dotted) and its closure's uniform-bed Umf at the ramp's packing (a triangle on 1)."""
+    simulated Umf (dotted) and its closure's uniform-bed Umf at the ramp's packing (a triangle on 1).
+    The ramps are saved outputs of this tool (their last lines) or ``results`` themselves."""
     from fvdem.analysis.plots import _pyplot, _save
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for name in outputs:
-        r = json.loads(Path(name).read_text().strip().splitlines()[-1])
+    if results is None:
+        results = [json.loads(Path(name).read_text().strip().splitlines()[-1]) for name in outputs]
+    for r in results:
         exp = r["umf_experiment"]
         u = np.array([c["velocity"] for c in r["curve"]]) / exp
         shape = "AR-1" if r["shape"] == "sphere" else f"AR-4 {r['closures'].upper()}"
         width = r["bed"].split(" column")[0].split("in a ")[-1]
+        found = r["umf_simulated"] is not None
         label = (f"{shape}, {r['drag']}, {r['bed'].split(' particles')[0]} in {width} ({r['settings']}): "
-                 f"Umf {r['umf_simulated']:.2f} m/s ({r['relative_error']:+.0%})")
+                 + (f"Umf {r['umf_simulated']:.2f} m/s ({r['relative_error']:+.0%})" if found else "no Umf found"))
         line, = ax.plot(u, [c["over_weight"] for c in r["curve"]], "o-", ms=3, label=label)
-        ax.axvline(r["umf_simulated"] / exp, color=line.get_color(), ls=":", lw=1)
+        if found:
+            ax.axvline(r["umf_simulated"] / exp, color=line.get_color(), ls=":", lw=1)
         ax.plot([r["umf_closure_uniform_bed"] / exp], [1.0], "v", color=line.get_color(), ms=8)
     ax.axvline(1.0, color="k", lw=1.2, label="Umf measured (1.58 m/s AR-1, 1.7 m/s AR-4)")
     ax.axvspan(0.9, 1.1, color="k", alpha=0.07, label="within 10 %")
