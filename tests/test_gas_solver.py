@@ -167,3 +167,44 @@ def test_fast_path_equals_the_plain_fipy_reference_path(periodic, scheme):
     np.testing.assert_allclose(u1, u2, rtol=0, atol=1e-9 * np.abs(u1).max())
     np.testing.assert_allclose(p1, p2, rtol=0, atol=1e-9 * max(np.abs(p1).max(), 1e-12))
     np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-9 * np.abs(f1).max())
+
+
+def test_pressure_preconditioner_is_refactored_when_a_steps_iterations_pass_the_running_average():
+    """The renewal rule: refactor once this step's CG iterations exceed (factorization cost + iterations
+    since the factorization) / steps since it; counts only, so reproducible."""
+    from fvdem.gas.solver import FACTOR_COST_ITERATIONS
+    mesh = GasMesh.box((3, 3, 4), (0.0, 0.0, 0.0), (0.03, 0.03, 0.04))
+    solver = GasSolver(mesh, inlet_velocity=0.1, scheme="piso", linear_solver="iterative")
+    solver._pressure_lu = object()  # a factorization exists
+    for since, before, this_step, due in ((5, 60, 30, True), (5, 60, 10, False), (1, 0, 500, False)):
+        solver._steps_since_factor, solver._iterations_since_factor = since, before
+        solver._step_iterations = this_step
+        solver._plan_refactor()
+        assert solver._refactor_due is due
+        assert solver._iterations_since_factor == before + this_step
+    assert (FACTOR_COST_ITERATIONS + 90) / 5 < 30  # the first case's arithmetic
+
+
+def test_renewal_rule_refactors_a_drifting_preconditioner_and_cuts_its_cg_iterations():
+    mesh = GasMesh.box((6, 6, 24), (0.0, 0.0, 0.0), (0.09, 0.09, 0.36))
+    z = mesh.cell_centers[:, 2]
+
+    def run(rule):
+        solver = GasSolver(mesh, inlet_velocity=2.0, scheme="piso", linear_solver="iterative", linear_tolerance=1e-8)
+        if not rule:
+            solver._plan_refactor = lambda: None
+        total = 0
+        for k in range(60):
+            wave = 0.5 + 0.1 * np.sin(2 * np.pi * (5.0 * k * 5e-4 + 4.0 * z))
+            solver.voidage_old[:] = solver.voidage
+            solver.voidage[:] = np.where(z < 0.15, wave, 1.0)
+            solver.beta[:] = np.where(z < 0.15, 3e4 * (1 - solver.voidage) ** 2 / solver.voidage, 0.0)
+            solver.step(5e-4)
+            total += solver._step_iterations
+        return total, solver.factorizations
+
+    plain, factors_plain = run(False)
+    renewed, factors_renewed = run(True)
+    assert factors_renewed > factors_plain
+    from fvdem.gas.solver import FACTOR_COST_ITERATIONS
+    assert renewed + FACTOR_COST_ITERATIONS * factors_renewed < plain + FACTOR_COST_ITERATIONS * factors_plain

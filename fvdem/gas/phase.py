@@ -178,7 +178,8 @@ class GasPhase:
                  "gas.face_pressure": s.face_pressure if s.face_pressure is not None else np.zeros(0),
                  "gas.gradient_correction": s.gradient_correction,
                  "gas.returned_momentum": self.returned_momentum,
-                 "gas.counters": np.array([self.step_count, s._steps_since_factor, s.factorizations])}
+                 "gas.counters": np.array([self.step_count, s._steps_since_factor, s.factorizations,
+                                           s._iterations_since_factor, int(s._refactor_due)])}
         if s._pressure_lu is not None:  # the preconditioner's matrix, to refactor it identically
             m = s._pressure_factor_matrix
             state.update({"gas.preconditioner.data": m.data, "gas.preconditioner.indices": m.indices,
@@ -196,9 +197,11 @@ class GasPhase:
         if "gas.gradient_correction" in data:
             s.gradient_correction = np.array(data["gas.gradient_correction"], copy=True)
         s.voidage_old = s.voidage.copy()
-        self.step_count, since_factor, s.factorizations = (int(v) for v in data["gas.counters"])
+        counters = [int(v) for v in data["gas.counters"]] + [0, 0]  # older checkpoints: 3 counters
+        self.step_count, since_factor, s.factorizations, iterations_since, refactor_due = counters[:5]
         if "gas.preconditioner.data" in data:
             import scipy.sparse as sp
             matrix = sp.csc_matrix((data["gas.preconditioner.data"], data["gas.preconditioner.indices"],
                                     data["gas.preconditioner.indptr"]), shape=tuple(data["gas.preconditioner.shape"]))
-            s.set_preconditioner_matrix(matrix, since_factor)
+            s.set_preconditioner_matrix(matrix, since_factor, iterations_since)
+            s._refactor_due = bool(refactor_due)

@@ -50,6 +50,9 @@ from .operators import DiffusionOperator, StencilPattern, UpwindConvectionOperat
 # feeds the neighbour coupling back with gain ``h / (1 - h)`` (``h`` = off-diagonal / diagonal of the
 # momentum matrix) and diverges for ``h > 1/2`` (a 12 x 12 square duct in SIMPLE); half of the change
 # per correction is stable for gains below 3
+# cost of one pressure-preconditioner factorization in CG iterations it replaces (10 x 10 x 70 grid:
+# the factorization 28 ms, a CG iteration with its LU solve 0.7 ms; measured 2026-12-01)
+FACTOR_COST_ITERATIONS = 40
 GRADIENT_RELAXATION = 0.5
 
 
@@ -117,7 +120,10 @@ class GasSolver:
         self.iterations = 0
         self.direct_fallbacks = 0  # iterative solves that fell back to a direct solve
         self.factorizations = 0  # pressure-preconditioner factorizations
-        self.refactor_interval = 200
+        self.refactor_interval = 200  # at most this many steps between factorizations
+        self._iterations_since_factor = 0  # CG iterations preconditioned by the current factorization
+        self._step_iterations = 0  # CG iterations of the current step
+        self._refactor_due = False
         self._pressure_lu = None
         self._pressure_factor_matrix = None
         self._steps_since_factor = 0
@@ -328,6 +334,7 @@ class GasSolver:
             count = [0]
             solution, info = spla.cg(matrix, rhs, x0=guess, rtol=self.linear_tolerance, atol=0.0,
                                      M=preconditioner, maxiter=1000, callback=lambda x: count.__setitem__(0, count[0] + 1))
+            self._step_iterations += count[0]
             if count[0] > 25:  # the stored factorization has drifted too far from the current matrix
                 self._pressure_lu = None
         else:  # compiled Jacobi-BiCGStab (fvdem/gas/krylov.py)
@@ -345,13 +352,13 @@ class GasSolver:
         only through the voidage and the momentum diagonal, slowly from step to step, so an older
         factorization cuts CG from ~200 (Jacobi) to a few iterations; it is refreshed every
         ``refactor_interval`` steps or when CG needs more than 25 iterations."""
-        if (self._pressure_lu is None or self._pressure_lu.shape != matrix.shape
+        if (self._pressure_lu is None or self._pressure_lu.shape != matrix.shape or self._refactor_due
                 or self._steps_since_factor >= self.refactor_interval):
             self.set_preconditioner_matrix(matrix.tocsc())
             self.factorizations += 1
         return spla.LinearOperator(matrix.shape, matvec=self._pressure_lu.solve, dtype=float)
 
-    def set_preconditioner_matrix(self, matrix, steps_since_factor: int = 0) -> None:
+    def set_preconditioner_matrix(self, matrix, steps_since_factor: int = 0, iterations_since_factor: int = 0) -> None:
         """Factorize ``matrix`` as the pressure preconditioner (also used to restore a checkpoint:
         refactoring the same matrix reproduces the same factorization, so a resumed run is bit-for-bit)."""
         self._pressure_factor_matrix = sp.csc_matrix(matrix)
@@ -362,6 +369,20 @@ class GasSolver:
         self._pressure_lu = spla.splu(self._pressure_factor_matrix, permc_spec="MMD_AT_PLUS_A",
                                       diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         self._steps_since_factor = steps_since_factor
+        self._iterations_since_factor = iterations_since_factor
+        self._refactor_due = False
+
+    def _plan_refactor(self) -> None:
+        """After a step: refactor the preconditioner at the next step when this step's CG iterations
+        exceed the average cost per step since the last factorization, the factorization counted as
+        ``FACTOR_COST_ITERATIONS`` (the renewal rule: renew once the marginal cost passes the average,
+        which minimises the long-run cost per step). Counts, not timings: a run stays reproducible."""
+        steps = self._steps_since_factor
+        if self._pressure_lu is None or steps <= 0:
+            return
+        self._iterations_since_factor += self._step_iterations
+        average = (FACTOR_COST_ITERATIONS + self._iterations_since_factor) / steps
+        self._refactor_due = steps > 1 and self._step_iterations > average
 
     def _predict_momentum(self, dt, u_old, gamma, inlet_value, relax):
         """Solve the three momentum components with the current pressure; returns ``(a_P, grad p)``."""
@@ -478,6 +499,7 @@ class GasSolver:
         inlet_value[self._inlet, 2] = self.inlet_velocity / eps[self._boundary_cell[self._inlet]]
         self.face_flux[self._inlet] = self._inlet_flux
         self._steps_since_factor += 1
+        self._step_iterations = 0
         if self.scheme == "piso":
             t0 = perf_counter()
             a_p, grad_p = self._predict_momentum(dt, u_old, gamma, inlet_value, 1.0)
@@ -486,6 +508,7 @@ class GasSolver:
             for _ in range(self.correctors):
                 residuals.append(self._correct_pressure(dt, a_p, grad_p, 1.0, old))
                 grad_p = self._face_gradient
+            self._plan_refactor()
             self.timings.add("gas_momentum", t1 - t0)
             self.timings.add("gas_pressure", perf_counter() - t1)
             self.iterations = 1
@@ -503,5 +526,6 @@ class GasSolver:
             change = np.abs(self.velocity - previous).max() / max(np.abs(self.velocity).max(), 1e-30)
             if residual < self.tolerance and change < self.tolerance:
                 break
+        self._plan_refactor()
         self.iterations = iteration
         return {"iterations": iteration, "continuity_residual": residual, "velocity_change": change}
