@@ -1,0 +1,31 @@
+"""tools/fixed_bed_layers.py: the uniform-bed pressure gradient it compares each layer with."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+import fixed_bed_layers as tool  # noqa: E402
+
+from fvdem.analysis.bed import uniform_bed_umf  # noqa: E402
+from fvdem.coupling.bridge import HydrodynamicModel  # noqa: E402
+
+
+@pytest.mark.parametrize("drag,length", [("hoelzer-sommerfeld", 5.3e-3), ("gidaspow", 5.3e-3),
+                                         ("sanjeevi-padding", 12.8e-3)])
+def test_uniform_gradient_at_the_closures_umf_holds_the_bed_weight(drag, length):
+    """At the closure's own uniform-bed Umf the gradient is the buoyant bed weight per volume,
+    eps_s (rho_p - rho_f) g: the force balance uniform_bed_umf solves, from the other side."""
+    diameter = 5.3e-3 if length == 5.3e-3 else 3.2e-3
+    model = HydrodynamicModel(drag, "none", "none", diameter, length, 1.2, 1.568e-5)
+    rng = np.random.default_rng(1)
+    axes = rng.normal(size=(50, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    voidage, density = 0.45, 1442.0
+    umf = uniform_bed_umf(model, voidage, axes, density)
+    gradient = tool.closure_gradient(model, voidage, umf, axes, density)
+    assert gradient == pytest.approx((1 - voidage) * (density - 1.2) * 9.81, rel=1e-6)
+    # and it grows with the velocity and falls with the voidage
+    assert tool.closure_gradient(model, voidage, 1.1 * umf, axes, density) > gradient
+    assert tool.closure_gradient(model, 0.5, umf, axes, density) < gradient
