@@ -18,6 +18,7 @@ compares, without any particle motion:
   effect is seen before and after.
 
     python tools/fixed_bed_layers.py --json [--voidage divided trilinear] [--drag NAME] [--case cases/ar1.toml]
+        [--state umf_sphere_defluidized.npz]
 
 Prints a table per method, writes ``fixed_bed_layers.png`` and, as the last line, one JSON object
 ``{"methods": {"<voidage>": {"umf_fixed_bed": ..., "umf_closure_uniform_bed": ..., "layers": [...]}}}``.
@@ -33,23 +34,16 @@ from pathlib import Path
 import numpy as np
 
 import fvdem
-from fvdem.analysis.bed import bed_packing, uniform_bed_umf
+from fvdem.analysis.bed import bed_packing, uniform_bed_pressure_gradient, uniform_bed_umf
 from fvdem.coupling.voidage import voidage_names
 from fvdem.scenes.observables import weight_per_area
 
 RATIOS = (0.9, 1.0, 1.1, 1.2)  # velocities solved, over the closure's uniform-bed Umf
 
 
-def closure_gradient(model, voidage, superficial, axes, density):
-    """-dp/dz [Pa/m] of a uniform fixed bed of gas fraction ``voidage`` at superficial velocity
-    ``superficial`` under the closure (model A: n <F_D> / eps, n particles per volume)."""
-    from fvdem.coupling.closures import spherocylinder_shape
-    volume = float(spherocylinder_shape(model.diameter, max(model.length, model.diameter))[1])
-    u = superficial / voidage
-    slip = np.zeros_like(axes)
-    slip[:, 2] = u
-    c = model.drag_coefficient(slip, np.full(len(axes), voidage), axes)
-    return (1.0 - voidage) / volume * float(np.mean(c)) * u / voidage
+def closure_gradient(model, voidage, superficial, axes, density=None):
+    """-dp/dz [Pa/m] of a uniform fixed bed under the closure (``analysis.bed.uniform_bed_pressure_gradient``)."""
+    return uniform_bed_pressure_gradient(model, voidage, superficial, axes)
 
 
 def steady(case_path, overrides, duration):
@@ -97,6 +91,8 @@ def main(argv=None):
     parser.add_argument("--case", default="cases/ar1.toml", help="a bed case whose initial state is a settled bed")
     parser.add_argument("--voidage", nargs="+", choices=voidage_names(), default=["divided", "trilinear"])
     parser.add_argument("--drag", help="drag law (fvdem laws drag; default: the case's)")
+    parser.add_argument("--state", help="particle state to freeze instead of the case's initial state (e.g. the "
+                        "defluidized bed validate_umf.py writes, umf_<tag>_defluidized.npz)")
     parser.add_argument("--duration", type=float, default=0.3, help="simulated seconds per velocity (to steady)")
     parser.add_argument("--cfd-step", type=float, default=5e-4)
     parser.add_argument("--out", default=".")
@@ -108,6 +104,8 @@ def main(argv=None):
             "gas.inlet_ramp": 0.0}
     if args.drag:
         base["coupling.drag"] = args.drag
+    if args.state:
+        base["particles.initial_state"] = str(Path(args.state).resolve())
     probe, _ = steady(args.case, base, 2 * args.cfd_step)
     packing = bed_packing(probe.particles, probe.case.domain.lower, probe.case.domain.upper, probe.case.domain.periodic)
     model, density = probe.bridge.model, probe.case.particles.density

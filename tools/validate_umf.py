@@ -39,7 +39,8 @@ import numpy as np
 
 import fvdem
 from fvdem.scenes.observables import weight_per_area
-from fvdem.analysis.bed import bed_packing, uniform_bed_umf
+from fvdem.analysis.bed import bed_packing, uniform_bed_pressure_gradient, uniform_bed_umf
+from fvdem.dem.particles import spherocylinder_volume
 from fvdem.case import case_from_dict
 from fvdem.coupling.closures import law_names, spherocylinder_shape, sphericities
 
@@ -155,6 +156,9 @@ def ramp(spec, threads=None):
     case = build_case(shape, o["closures"], o["particles"], o["threads"], o["width"], o["settings"], o["drag"])
     sim = fvdem.Simulation(case)
     weight = weight_per_area(sim.model)
+    box = case.domain
+    area = float(np.prod(np.asarray(box.upper[:2]) - np.asarray(box.lower[:2])))
+    solid_volume = float(spherocylinder_volume(sim.particles.radius, sim.particles.half_length).sum())
     sim.run(o["start"])
     ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
     if o["quick"]:
@@ -167,10 +171,18 @@ def ramp(spec, threads=None):
         u = ratio * umf_exp
         sim.gas.solver.set_inlet_velocity(u)
         drop, spread = mean_pressure_drop(sim, o["hold"])
+        # the bed as it is at the end of this hold: the uniform bed of its core packing and equivalent
+        # height under the closure, at this velocity (the CFD-DEM's own error, hold by hold)
+        hold_packing = packed_state(sim)
+        solid_height = solid_volume / area
+        uniform = uniform_bed_pressure_gradient(sim.bridge.model, 1.0 - hold_packing["solids_fraction"], u,
+                                                hold_packing["axes"]) * solid_height / hold_packing["solids_fraction"]
         curve.append({"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
-                      "over_weight": drop / weight})
+                      "over_weight": drop / weight, "packed_solids_fraction": hold_packing["solids_fraction"],
+                      "closure_uniform_bed_over_weight": uniform / weight})
         print(f"{tag}: U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {drop:.1f} Pa = {drop / weight:.3f} W/A "
-              f"(+- {spread:.1f})", flush=True)
+              f"(+- {spread:.1f}); core solids {hold_packing['solids_fraction']:.4f}, a uniform bed of it "
+              f"{uniform / weight:.3f} W/A", flush=True)
     velocity = [c["velocity"] for c in curve]
     drop = [c["pressure_drop"] for c in curve]
     plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp)
@@ -183,6 +195,10 @@ def ramp(spec, threads=None):
     closure_umf = uniform_bed_umf(sim.bridge.model, 1.0 - packing["solids_fraction"], packing["axes"], p.density)
     png = Path(o["out"]) / f"umf_{tag}.png"
     _plot(png, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag)
+    # the defluidized bed, for tools/fixed_bed_layers.py --state (its structure without its motion)
+    state = Path(o["out"]) / f"umf_{tag}_defluidized.npz"
+    order = np.argsort(sim.particles.ids, kind="stable")
+    np.savez(state, **{k: v[order] for k, v in sim.particles.as_dict().items()})
     return {
         "shape": shape, "closures": None if shape == "sphere" else o["closures"],
         "umf_simulated": umf, "umf_experiment": umf_exp,
@@ -200,7 +216,7 @@ def ramp(spec, threads=None):
                f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
                "property of particles and gas)",
         "settings": o["settings"],
-        "hold_seconds": o["hold"], "curve": curve, "plot": str(png),
+        "hold_seconds": o["hold"], "curve": curve, "plot": str(png), "defluidized_state": str(state),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
     }
 

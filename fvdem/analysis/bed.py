@@ -116,3 +116,18 @@ def uniform_bed_umf(model, voidage, axes, particle_density, gravity=9.81):
         return float(np.mean(model.drag_coefficient(slip, eps, axes)) * u - held)
 
     return float(brentq(excess, 1e-6, 100.0, xtol=1e-9))
+
+
+def uniform_bed_pressure_gradient(model, voidage, superficial, axes):
+    """-dp/dz [Pa/m] (gas head excluded) that the drag closure ``model`` gives a uniform fixed bed of gas
+    fraction ``voidage`` with particle axes ``axes`` (N, 3) at superficial velocity ``superficial`` [m/s]:
+    model A's ``n <c(U/eps)> (U/eps) / eps``, ``n = (1 - eps) / V_p`` particles per volume. At
+    ``uniform_bed_umf`` it equals the buoyant bed weight per volume ``(1 - eps)(rho_p - rho_f) g``."""
+    from ..coupling.closures import spherocylinder_shape
+    axes = np.atleast_2d(np.asarray(axes, float))
+    volume = float(spherocylinder_shape(model.diameter, max(model.length, model.diameter))[1])
+    u = superficial / voidage
+    slip = np.zeros_like(axes)
+    slip[:, 2] = u
+    c = model.drag_coefficient(slip, np.full(len(axes), float(voidage)), axes)
+    return (1.0 - voidage) / volume * float(np.mean(c)) * u / voidage
