@@ -158,18 +158,23 @@ def _plot(path, methods):
     for name, m in methods.items():
         rows = m["layers_at_closure_umf"]
         z = [r["z"] for r in rows]
-        ratio = [r["pressure_gradient"] / r["closure_uniform_gradient"] if r["closure_uniform_gradient"] else np.nan
-                 for r in rows]
-        axes[0].plot([r["voidage"] for r in rows], z, "o-", ms=3, label=f"{name}: layer voidage")
-        axes[1].plot(ratio, z, "o-", ms=3, label=f"{name}")
+        axes[0].plot([r["voidage"] for r in rows], z, "o-", ms=3, label=f"{name}: layer mean")
+        axes[0].plot([r["voidage_wall"] for r in rows], z, ":", lw=1, color=axes[0].lines[-1].get_color(),
+                     label=f"{name}: wall cells")
+        full = [r for r in rows if r["closure_uniform_gradient"] > 0 and r["voidage"] < 0.9]  # not the surface cell
+        axes[1].plot([r["pressure_gradient"] / r["closure_uniform_gradient"] for r in full], [r["z"] for r in full],
+                     "o-", ms=3, label=f"{name}: fixed-bed Umf {m['relative_difference']:+.1%} from the closure's"
+                     if m["relative_difference"] is not None else name)
     axes[0].set_xlabel("cell-layer voidage")
     axes[0].set_ylabel("z [m]")
     axes[1].axvline(1.0, color="k", lw=0.8)
+    axes[1].set_xlim(0.6, 1.4)
     axes[1].set_xlabel("measured -dp/dz / uniform-bed closure at the layer voidage")
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle("frozen settled bed at the closure's uniform-bed Umf", fontsize=9)
+    fig.suptitle("frozen bed at the closure's uniform-bed Umf (layers below the partly filled surface cell)",
+                 fontsize=9)
     return _save(fig, path)
 
 
