@@ -270,32 +270,42 @@ def slip_reynolds(slip, voidage, shape, out):
 
 
 # --------------------------------------------------------------------------- lift and torque kernels
+@njit(cache=True, inline="always")
+def _scale_row(out, i, factor):
+    out[i, 0] *= factor
+    out[i, 1] *= factor
+    out[i, 2] *= factor
+
+
 @njit(cache=True, parallel=True)
+def _zastawny_form(slip, voidage, axis, shape, out, table, torque):
+    """The Zastawny form's force ``1/2 C_L rho (pi/4) d_p^2 |u|^2`` along the lift direction, or its
+    torque ``1/2 C_T rho (pi/8) d_p^3 |u|^2`` along the torque direction (``torque``), ``C`` from
+    ``table`` (Table 3's b1..b10 or c1..c10)."""
+    for i in numba.prange(slip.shape[0]):
+        speed = _speed(slip, i)
+        re = _reynolds(speed, voidage[i], shape)
+        alpha = math.acos(math.sqrt(_cos2(slip, axis, i, speed)))
+        if torque:
+            magnitude = 0.5 * _zastawny(re, alpha, table) * shape[RHO] * np.pi / 8 * shape[D_P] ** 3 * speed ** 2
+            _torque_direction(slip, axis, i, out)
+        else:
+            magnitude = 0.5 * _zastawny(re, alpha, table) * shape[RHO] * np.pi / 4 * shape[D_P] ** 2 * speed ** 2
+            _lift_direction(slip, axis, i, out)
+        _scale_row(out, i, magnitude)
+    return out
+
+
+@njit(cache=True)
 def zastawny_lift(slip, voidage, axis, shape, out):
     """``closures.single_particle_lift``: 1/2 C_L rho (pi/4) d_p^2 |u|^2 along the lift direction."""
-    for i in numba.prange(slip.shape[0]):
-        speed = _speed(slip, i)
-        re = _reynolds(speed, voidage[i], shape)
-        alpha = math.acos(math.sqrt(_cos2(slip, axis, i, speed)))
-        magnitude = 0.5 * _zastawny(re, alpha, Z_LIFT) * shape[RHO] * np.pi / 4 * shape[D_P] ** 2 * speed ** 2
-        _lift_direction(slip, axis, i, out)
-        for k in range(3):
-            out[i, k] *= magnitude
-    return out
+    return _zastawny_form(slip, voidage, axis, shape, out, Z_LIFT, False)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def zastawny_torque(slip, voidage, axis, shape, out):
     """``closures.single_particle_torque``: 1/2 C_T rho (pi/8) d_p^3 |u|^2 along the torque direction."""
-    for i in numba.prange(slip.shape[0]):
-        speed = _speed(slip, i)
-        re = _reynolds(speed, voidage[i], shape)
-        alpha = math.acos(math.sqrt(_cos2(slip, axis, i, speed)))
-        magnitude = 0.5 * _zastawny(re, alpha, Z_TORQUE) * shape[RHO] * np.pi / 8 * shape[D_P] ** 3 * speed ** 2
-        _torque_direction(slip, axis, i, out)
-        for k in range(3):
-            out[i, k] *= magnitude
-    return out
+    return _zastawny_form(slip, voidage, axis, shape, out, Z_TORQUE, True)
 
 
 @njit(cache=True, parallel=True)
@@ -309,8 +319,7 @@ def sanjeevi_padding_lift(slip, voidage, axis, shape, out):
         f_l = (_sp_drag_at(re, 1.0 - eps, 1) - _sp_drag_at(re, 1.0 - eps, 0)) * math.sin(phi) * math.cos(phi)
         magnitude = 3 * np.pi * shape[MU] * shape[D_P] * eps * speed * f_l
         _lift_direction(slip, axis, i, out)
-        for k in range(3):
-            out[i, k] *= magnitude
+        _scale_row(out, i, magnitude)
     return out
 
 
@@ -329,8 +338,7 @@ def sanjeevi_padding_torque(slip, voidage, axis, shape, out):
         phi = math.acos(math.sqrt(_cos2(slip, axis, i, speed)))
         magnitude = 2 * np.pi * shape[MU] * shape[D_P] ** 2 * eps * speed * t_mag * math.sin(phi) * math.cos(phi)
         _torque_direction(slip, axis, i, out)
-        for k in range(3):
-            out[i, k] *= magnitude
+        _scale_row(out, i, magnitude)
     return out
 
 
@@ -401,14 +409,12 @@ def sanjeevi_padding_all(slip, voidage, axis, shape, c_out, lift_out, torque_out
         f_l = (f90 - f0) * math.sin(phi) * math.cos(phi)
         magnitude = 3 * np.pi * shape[MU] * shape[D_P] * eps * speed * f_l
         _lift_direction(slip, axis, i, lift_out)
-        for k in range(3):
-            lift_out[i, k] *= magnitude
+        _scale_row(lift_out, i, magnitude)
         isolated = _zastawny(re, np.pi / 4, Z_TORQUE) * re / 16.0
         t_mag = (isolated * (1 - es) ** 2
                  + re ** SP_TORQUE[0] * es ** SP_TORQUE[1] * (SP_TORQUE[2] * (1 - es) + SP_TORQUE[3] * es ** 3 / (1 - es))
                  + SP_TORQUE[4] * es * (1 - es) ** 2 * re)
         magnitude = 2 * np.pi * shape[MU] * shape[D_P] ** 2 * eps * speed * t_mag * math.sin(phi) * math.cos(phi)
         _torque_direction(slip, axis, i, torque_out)
-        for k in range(3):
-            torque_out[i, k] *= magnitude
+        _scale_row(torque_out, i, magnitude)
     return c_out, lift_out, torque_out
