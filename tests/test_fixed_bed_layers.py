@@ -1,15 +1,10 @@
-"""tools/fixed_bed_layers.py: the uniform-bed pressure gradient it compares each layer with."""
-import sys
-from pathlib import Path
-
+"""The uniform-bed pressure gradient tools/fixed_bed_layers.py and validate_umf.py compare the
+simulated bed with (``fvdem.analysis.bed.uniform_bed_pressure_gradient``)."""
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-import fixed_bed_layers as tool  # noqa: E402
-
-from fvdem.analysis.bed import uniform_bed_umf  # noqa: E402
-from fvdem.coupling.bridge import HydrodynamicModel  # noqa: E402
+from fvdem.analysis.bed import uniform_bed_pressure_gradient, uniform_bed_umf
+from fvdem.coupling.bridge import HydrodynamicModel
 
 
 @pytest.mark.parametrize("drag,length", [("hoelzer-sommerfeld", 5.3e-3), ("gidaspow", 5.3e-3),
@@ -24,8 +19,8 @@ def test_uniform_gradient_at_the_closures_umf_holds_the_bed_weight(drag, length)
     axes /= np.linalg.norm(axes, axis=1)[:, None]
     voidage, density = 0.45, 1442.0
     umf = uniform_bed_umf(model, voidage, axes, density)
-    gradient = tool.closure_gradient(model, voidage, umf, axes, density)
+    gradient = uniform_bed_pressure_gradient(model, voidage, umf, axes)
     assert gradient == pytest.approx((1 - voidage) * (density - 1.2) * 9.81, rel=1e-6)
     # and it grows with the velocity and falls with the voidage
-    assert tool.closure_gradient(model, voidage, 1.1 * umf, axes, density) > gradient
-    assert tool.closure_gradient(model, 0.5, umf, axes, density) < gradient
+    assert uniform_bed_pressure_gradient(model, voidage, 1.1 * umf, axes) > gradient
+    assert uniform_bed_pressure_gradient(model, 0.5, umf, axes) < gradient

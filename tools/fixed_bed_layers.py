@@ -41,11 +41,6 @@ from fvdem.scenes.observables import weight_per_area
 RATIOS = (0.9, 1.0, 1.1, 1.2)  # velocities solved, over the closure's uniform-bed Umf
 
 
-def closure_gradient(model, voidage, superficial, axes, density=None):
-    """-dp/dz [Pa/m] of a uniform fixed bed under the closure (``analysis.bed.uniform_bed_pressure_gradient``)."""
-    return uniform_bed_pressure_gradient(model, voidage, superficial, axes)
-
-
 def steady(case_path, overrides, duration):
     """The frozen bed with the gas run ``duration`` s: the simulation at its end."""
     case = fvdem.load_case(case_path, dict(overrides, **{"particles.fixed": True, "output.progress": False}))
@@ -58,7 +53,7 @@ def steady(case_path, overrides, duration):
     return sim, drops
 
 
-def layers(sim, top, model, axes, superficial, density):
+def layers(sim, top, model, axes, superficial):
     """Per cell layer below the bed top: voidage, measured -dp/dz, the uniform-bed closure's at that
     voidage, and the wall cells' over the interior cells' superficial velocity."""
     mesh, s = sim.gas.mesh, sim.gas.solver
@@ -78,7 +73,7 @@ def layers(sim, top, model, axes, superficial, density):
         lo, hi = max(k - 1, 0), min(k + 1, nz - 1)
         measured = -(p[hi] - p[lo]) / ((hi - lo) * dz) - sim.case.gas.density * g  # less the gas head
         layer_eps = float(eps[k].mean())
-        expected = closure_gradient(model, min(layer_eps, 0.999), superficial, axes, density) if layer_eps < 0.999 else 0.0
+        expected = uniform_bed_pressure_gradient(model, layer_eps, superficial, axes) if layer_eps < 0.999 else 0.0
         out.append({"z": z, "voidage": layer_eps, "voidage_wall": float(eps[k][wall].mean()),
                     "voidage_interior": float(eps[k][~wall].mean()), "pressure_gradient": float(measured),
                     "closure_uniform_gradient": float(expected),
@@ -123,7 +118,7 @@ def main(argv=None):
                                     args.duration)
             drift = abs(drops[-1] - drops[-2]) / max(abs(drops[-1]), 1e-12)
             curve.append({"velocity": u, "pressure_drop_over_weight": drops[-1] / weight, "last_change": drift,
-                          "layers": layers(sim, packing["bed_top"], model, packing["axes"], u, density)})
+                          "layers": layers(sim, packing["bed_top"], model, packing["axes"], u)})
             print(f"{method:10s} U = {u:.3f} m/s ({ratio:.2f} x closure Umf): dP = {drops[-1] / weight:.4f} W/A "
                   f"(last change {drift:.1e})", flush=True)
         x = np.array([c["velocity"] for c in curve])

@@ -103,17 +103,10 @@ def uniform_bed_umf(model, voidage, axes, particle_density, gravity=9.81):
     """
     from scipy.optimize import brentq
 
-    from ..coupling.closures import spherocylinder_shape
-    axes = np.atleast_2d(np.asarray(axes, float))
-    eps = np.full(len(axes), float(voidage))
-    volume = float(spherocylinder_shape(model.diameter, max(model.length, model.diameter))[1])
-    held = voidage * volume * (particle_density - model.density) * gravity
+    weight = (1.0 - voidage) * (particle_density - model.density) * gravity  # buoyant bed weight per volume
 
     def excess(superficial):
-        u = superficial / voidage
-        slip = np.zeros_like(axes)
-        slip[:, 2] = u
-        return float(np.mean(model.drag_coefficient(slip, eps, axes)) * u - held)
+        return uniform_bed_pressure_gradient(model, voidage, superficial, axes) - weight
 
     return float(brentq(excess, 1e-6, 100.0, xtol=1e-9))
 

@@ -200,7 +200,7 @@ class CouplingBridge:
         t_after_gas = clock()
         fields = [s.flux_velocity()] + ([s.pressure_gradient()] if cfg.pressure_gradient_force else [])
         at_particles = grid_map.gather(np.column_stack(fields))  # one pass for both
-        fluid_velocity = np.ascontiguousarray(at_particles[:, :3])
+        fluid_velocity = at_particles[:, :3]
         external = np.zeros_like(slip)
         volume = self.particle_volume()[:, None]
         if cfg.pressure_gradient_force:

@@ -379,6 +379,16 @@ class ParticleShape:
         return np.array([self.diameter, self.length, self.equivalent_diameter, self.density, self.viscosity])
 
 
+def kernel_inputs(slip, voidage, axis):
+    """Slip (N, 3), voidage (N,) and axes (N, 3) as the contiguous float arrays the kernels take
+    (a scalar voidage or a single axis broadcast to every particle)."""
+    slip = np.ascontiguousarray(np.atleast_2d(slip), dtype=float)
+    n = len(slip)
+    voidage = np.ascontiguousarray(np.broadcast_to(np.asarray(voidage, float), (n,)))
+    axis = np.ascontiguousarray(np.broadcast_to(np.asarray(axis, float), (n, 3)))
+    return slip, voidage, axis
+
+
 @dataclass(frozen=True)
 class Law:
     kind: str  # "drag", "lift" or "torque"
@@ -399,10 +409,8 @@ class Law:
         if self.kernel is None:
             return self.function(particle, slip, voidage, axis)
         from . import kernels
-        slip = np.ascontiguousarray(np.atleast_2d(slip), dtype=float)
+        slip, voidage, axis = kernel_inputs(slip, voidage, axis)
         n = len(slip)
-        voidage = np.ascontiguousarray(np.broadcast_to(np.asarray(voidage, float), (n,)))
-        axis = np.ascontiguousarray(np.broadcast_to(np.asarray(axis, float), (n, 3)))
         shape = particle.kernel_args
         out = np.empty(n) if self.kind == "drag" else np.empty((n, 3))
         getattr(kernels, self.kernel)(slip, voidage, axis, shape, out)
@@ -454,10 +462,8 @@ def evaluate_set(particle: "ParticleShape", drag: str, lift: str, torque: str, s
                 law("lift", lift).evaluate(particle, slip, voidage, axis),
                 law("torque", torque).evaluate(particle, slip, voidage, axis))
     from . import kernels
-    slip = np.ascontiguousarray(np.atleast_2d(slip), dtype=float)
+    slip, voidage, axis = kernel_inputs(slip, voidage, axis)
     n = len(slip)
-    voidage = np.ascontiguousarray(np.broadcast_to(np.asarray(voidage, float), (n,)))
-    axis = np.ascontiguousarray(np.broadcast_to(np.asarray(axis, float), (n, 3)))
     return getattr(kernels, fused)(slip, voidage, axis, particle.kernel_args, np.empty(n), np.empty((n, 3)),
                                    np.empty((n, 3)))
 

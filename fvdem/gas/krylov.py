@@ -14,15 +14,6 @@ from numba import njit
 
 
 @njit(cache=True)
-def _residual(indptr, indices, data, x, b, out):
-    for i in range(len(b)):
-        total = 0.0
-        for p in range(indptr[i], indptr[i + 1]):
-            total += data[p] * x[indices[p]]
-        out[i] = b[i] - total
-
-
-@njit(cache=True)
 def _matvec(indptr, indices, data, x, out):
     for i in range(len(out)):
         total = 0.0
@@ -45,7 +36,9 @@ def bicgstab_jacobi(indptr, indices, data, b, x, rtol, maxiter):
         if inverse_diagonal[i] == 0.0:
             return -1, 0
     r = np.empty(n)
-    _residual(indptr, indices, data, x, b, r)
+    _matvec(indptr, indices, data, x, r)
+    for i in range(n):
+        r[i] = b[i] - r[i]
     tolerance = rtol * np.sqrt(np.dot(b, b))
     if np.sqrt(np.dot(r, r)) <= tolerance:
         return 0, 0
