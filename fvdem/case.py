@@ -156,7 +156,8 @@ class ContactConfig:
     tangential_stiffness_ratio: float = spec(2.0 / 7.0, gt=0.0, doc="k_t / k_n")
     tangential_damping_ratio: float = spec(1.0, ge=0.0, doc="eta_t / eta_n")
     neighbour_skin: float | None = spec(None, unit="length", gt=0.0, optional=True,
-                                        doc="neighbour-list skin [m] (default: 1/10 of the diameter)")
+                                        doc="neighbour-list skin [m], fixed (default: adapted at each rebuild to keep "
+                                            "about 8 DEM steps between rebuilds, from 0.1 to 1 diameter)")
 
 
 @dataclass(frozen=True)
@@ -308,6 +309,7 @@ class Case:
         return Path(self.source).parent / path
 
     def neighbour_skin(self) -> float:
+        """The fixed skin, or the adaptive skin's floor (its start) [m]."""
         return self.contact.neighbour_skin or 0.1 * self.particles.diameter
 
     def collision_time(self) -> float:

@@ -111,7 +111,8 @@ def build_dem(case: Case, particles: ParticleArrays) -> DEMSystem:
     contact = ContactModel(c.normal_stiffness, c.restitution, c.friction, c.rolling_friction,
                            c.tangential_stiffness_ratio, c.tangential_damping_ratio)
     box = Box(case.domain.lower, case.domain.upper, case.domain.periodic)
-    return DEMSystem(particles, box, contact, case.time.dem_step, case.domain.gravity, case.neighbour_skin())
+    return DEMSystem(particles, box, contact, case.time.dem_step, case.domain.gravity,
+                     case.contact.neighbour_skin)  # None: the adaptive skin
 
 
 class Model:

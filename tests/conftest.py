@@ -10,15 +10,16 @@ DENSITY = 1442.0
 
 
 def make_system(position, radius, half_length=0.0, velocity=None, axis=None, box=None, contact=None,
-                dt=None, gravity=(0.0, 0.0, 0.0), steps_per_collision=50):
-    """A DEM system of a few particles; dt defaults to collision time / ``steps_per_collision``."""
+                dt=None, gravity=(0.0, 0.0, 0.0), steps_per_collision=50, skin=None):
+    """A DEM system of a few particles; dt defaults to collision time / ``steps_per_collision``;
+    ``skin=None`` is the adaptive skin."""
     particles = ParticleArrays.create(np.asarray(position, float), radius, half_length, DENSITY, axis=axis,
                                       velocity=None if velocity is None else np.asarray(velocity, float))
     box = box or Box((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), (True, True, True))
     contact = contact or ContactModel()
     if dt is None:
         dt = contact.collision_time(float(particles.mass.min())) / steps_per_collision
-    return DEMSystem(particles, box, contact, dt, gravity)
+    return DEMSystem(particles, box, contact, dt, gravity, skin)
 
 
 def by_id(system, name):

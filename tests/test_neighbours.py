@@ -1,20 +1,25 @@
 """Neighbour lists: complete against brute force; contact histories survive rebuilds and re-sorting."""
 import numpy as np
+import pytest
 
 from fvdem.dem.geometry import segment_distance
-from fvdem.dem.system import Box, ContactModel
+from fvdem.dem.system import SKIN_RANGE, SKIN_TARGET_INTERVAL, Box, ContactModel, adapted_skin
 
 from conftest import by_id, make_system
 
 
-def test_half_list_is_complete_and_unique_against_brute_force():
+@pytest.mark.parametrize("skin", [None, 7.5e-3])
+def test_half_list_is_complete_and_unique_against_brute_force(skin):
+    """Also with a skin wide enough that rows overflow the one-pass build's first row capacity."""
     rng = np.random.default_rng(7)
     n = 400
     r, h = 1.5e-3, 4.5e-3
     box = Box((0.0, 0.0, 0.0), (0.06, 0.05, 0.07), (True, False, True))
     pos = rng.uniform([0, 0.003, 0], [0.06, 0.047, 0.07], size=(n, 3))
-    s = make_system(pos, r, h, axis=rng.normal(size=(n, 3)), box=box)
+    s = make_system(pos, r, h, axis=rng.normal(size=(n, 3)), box=box, skin=skin)
     p = s.particles
+    if skin is not None:
+        assert np.diff(s.row_start).max() > 16  # the buffer was widened and the build redone
     listed = set()
     for i in range(n):
         for slot in range(s.row_start[i], s.row_start[i + 1]):
@@ -40,8 +45,7 @@ def _sliding_pair(skin):
     """A sphere pressed on another and dragged sideways: a long-lived sliding/sticking contact."""
     d = 4e-3
     s = make_system([[0.05, 0.05, 0.05], [0.05, 0.05, 0.05 + d - 1e-7]], d / 2, velocity=[[0, 0, 0], [0.02, 0.01, 0]],
-                    contact=ContactModel(friction=0.5, rolling_friction=0.1), dt=2e-6)
-    s.skin = skin
+                    contact=ContactModel(friction=0.5, rolling_friction=0.1), dt=2e-6, skin=skin)
     s.rebuild()
     s.compute_forces()
     return s
@@ -61,3 +65,75 @@ def test_history_survives_rebuilds():
     np.testing.assert_allclose(by_id(always, "velocity"), by_id(never, "velocity"), rtol=1e-10, atol=1e-15)
     np.testing.assert_allclose(by_id(always, "angular_velocity"), by_id(never, "angular_velocity"),
                                rtol=1e-10, atol=1e-12)
+
+
+def test_adapted_skin_converges_to_the_target_interval_within_bounds():
+    """If a list lasts in proportion to its skin (ballistic motion), the rule reaches the target
+    interval geometrically; each change is at most a factor 2 and the bounds hold."""
+    speed = 1e-5  # m per step: a list with skin s lasts s / (2 speed) steps
+    skin = 1e-4
+    for _ in range(30):
+        skin = adapted_skin(skin, int(skin / (2 * speed)), 1e-5, 1e-2)
+    assert abs(skin / (2 * speed) - SKIN_TARGET_INTERVAL) <= 1.0
+    assert adapted_skin(1e-3, 1, 1e-5, 1e-2) == 2e-3  # factor capped at 2
+    assert adapted_skin(1e-3, 10_000, 1e-5, 1e-2) == 5e-4  # and at 1/2
+    assert adapted_skin(1e-3, 10_000, 9e-4, 1e-2) == 9e-4  # floor
+    assert adapted_skin(1e-3, 1, 1e-5, 1.5e-3) == 1.5e-3  # ceiling
+
+
+def _granular_gas(skin, steps=300):
+    rng = np.random.default_rng(3)
+    n, d = 150, 2e-3
+    box = Box((0.0, 0.0, 0.0), (0.03, 0.03, 0.03), (True, True, True))
+    side = np.arange(6) * 0.005 + 0.0025
+    grid = np.stack(np.meshgrid(side, side, side, indexing="ij"), -1).reshape(-1, 3)[:n]
+    s = make_system(grid, d / 2, velocity=rng.normal(scale=0.5, size=(n, 3)), box=box, dt=2e-5,
+                    contact=ContactModel(normal_stiffness=800.0), skin=skin)
+    intervals = []
+    last = 0
+    s.contact_steps = 0  # pair contacts summed over steps: the gas collides
+    for _ in range(steps):
+        before = s.rebuild_count
+        s.step(1)
+        s.contact_steps += int(s._row_contacts.sum())
+        if s.rebuild_count != before:
+            intervals.append(s.step_count - last)
+            last = s.step_count
+    return s, intervals
+
+
+def test_adaptive_skin_keeps_the_list_complete_and_reaches_its_interval():
+    """A colliding granular gas at 0.5 m/s: the adaptive skin grows from its floor until lists last
+    about the target interval, and the trajectory is that of a list rebuilt every step."""
+    adaptive, intervals = _granular_gas(None)
+    every_step, _ = _granular_gas(1e-9)
+    assert every_step.rebuild_count >= 299
+    floor = SKIN_RANGE[0] * 2e-3
+    assert adaptive.skin > 2 * floor  # it grew: at the floor the gas rebuilt every ~1 step
+    late = intervals[len(intervals) // 2:]
+    assert SKIN_TARGET_INTERVAL / 2 <= np.mean(late) <= 2 * SKIN_TARGET_INTERVAL
+    assert adaptive.contact_steps > 100  # collisions happened: the histories and sort order were exercised
+    np.testing.assert_allclose(by_id(adaptive, "position"), by_id(every_step, "position"), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(by_id(adaptive, "velocity"), by_id(every_step, "velocity"), rtol=1e-9, atol=1e-12)
+
+
+def test_adaptive_skin_stays_at_its_floor_at_rest_and_under_its_ceiling():
+    s = make_system([[0.05, 0.05, 0.05], [0.05, 0.05, 0.052]], 1e-3, skin=None)
+    floor = s.skin
+    s.step(2000)
+    assert s.skin == floor == SKIN_RANGE[0] * 2e-3 and s.rebuild_count == 1
+    for _ in range(8):
+        s.rebuild()  # lists that lasted no step: the skin doubles each time, up to its ceiling
+    assert s.skin == SKIN_RANGE[1] * 2e-3
+
+
+def test_adaptive_skin_and_its_last_rebuild_survive_a_checkpoint():
+    s, _ = _granular_gas(None, steps=120)
+    state = s.state()
+    t, _ = _granular_gas(None, steps=1)
+    t.restore(state)
+    assert t.skin == s.skin and t._last_rebuild_step == s._last_rebuild_step
+    for sys_ in (s, t):
+        sys_.step(100)
+    np.testing.assert_array_equal(by_id(t, "position"), by_id(s, "position"))
+    assert t.rebuild_count == s.rebuild_count

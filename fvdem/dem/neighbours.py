@@ -82,14 +82,19 @@ def _pair_within(i, j, position, axis, radius, half_length, box_length, periodic
 
 @njit(cache=True, parallel=True)
 def build_half_list(position, axis, radius, half_length, box_lo, box_length, periodic, cell_size,
-                    n_cells, cell_of, start, skin, row_start, neighbours, counts, fill):
-    """Count (``fill=False``: ``counts[i]`` gets row i's length) or fill (``fill=True``: partners
-    j > i written from ``row_start[i]``) the half list.
+                    n_cells, cell_of, start, skin, buffer, counts):
+    """The half list in one pass: row i's partners j > i go to ``buffer[i, :]`` (a fixed
+    capacity per row) in cell-scan order and ``counts[i]`` gets the row's length, which may exceed
+    the capacity: the caller then enlarges ``buffer`` and calls again (``compact_rows`` copies the
+    rows into the CSR list). One pass instead of a counting pass and a filling pass: each
+    candidate pair is tested once.
 
     Scans the 27 cells around each particle's cell (wrapped on periodic axes, which need at
-    least 3 cells so no cell is visited twice).
+    least 3 cells so no cell is visited twice). Particles are sorted by cell, so within a cell only
+    the indices above i are visited.
     """
     n = position.shape[0]
+    capacity = buffer.shape[1]
     nx, ny, nz = n_cells[0], n_cells[1], n_cells[2]
     for i in prange(n):
         c = cell_of[i]
@@ -97,7 +102,6 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
         cy = (c // nx) % ny
         cz = c // (nx * ny)
         count = 0
-        base = row_start[i]
         for oz in range(-1, 2):
             kz = cz + oz
             if kz < 0 or kz >= nz:
@@ -117,14 +121,21 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
                             continue
                         kx %= nx
                     cell = (kz * ny + ky) * nx + kx
-                    for j in range(start[cell], start[cell + 1]):
-                        if j <= i:
-                            continue
+                    for j in range(max(start[cell], i + 1), start[cell + 1]):
                         if _pair_within(i, j, position, axis, radius, half_length, box_length, periodic, skin):
-                            if fill:
-                                neighbours[base + count] = j
+                            if count < capacity:
+                                buffer[i, count] = j
                             count += 1
         counts[i] = count
+
+
+@njit(cache=True, parallel=True)
+def compact_rows(buffer, counts, row_start, neighbours):
+    """Copy the first ``counts[i]`` entries of each buffer row into ``neighbours[row_start[i]:]``."""
+    for i in prange(counts.shape[0]):
+        base = row_start[i]
+        for k in range(counts[i]):
+            neighbours[base + k] = buffer[i, k]
 
 
 @njit(cache=True)
