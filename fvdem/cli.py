@@ -104,8 +104,15 @@ def cmd_compare(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from .study import load_study, report, run_study
+    from .study import load_study, report, request_stop, run_study, select_runs
     target = Path(args.study)
+    if args.stop:
+        if not target.is_dir() or not (target / "study.toml").exists():
+            return _fail(f"--stop: {target} is not a study folder (no study.toml)")
+        log_path = request_stop(target)
+        print(f"wrote {log_path}: the study's running runs checkpoint at their next chunk and stop; "
+              "run the same fvdem study command to continue")
+        return 0
     if args.report and target.is_dir():
         if not (target / "study.json").exists():
             return _fail(f"{target} is not a study folder (no study.json)")
@@ -116,7 +123,7 @@ def cmd_study(args) -> int:
         return _fail("fvdem study STUDY.toml needs --out DIR (or: fvdem study DIR --report)")
     if args.threads_per_worker < 1:
         return _fail(f"--threads-per-worker {args.threads_per_worker}: at least 1")
-    study = load_study(target, args.out)
+    study = select_runs(load_study(target, args.out), args.only)
     log = (lambda line: print(line, file=sys.stderr, flush=True))
     log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {study.duration:g} s into {args.out}")
     result = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers,
@@ -126,8 +133,12 @@ def cmd_study(args) -> int:
     failed = [r for r in result["runs"] if r["status"] == "failed"]
     for r in failed:
         log(f"failed: {r['name']}: {r['error']}")
+    stopped = [r["name"] for r in result["runs"] if r["status"] == "stopped"]
+    if result.get("stopped"):
+        log(f"stopped: {len(stopped)} run(s) checkpointed or not started ({', '.join(stopped)}); the same command "
+            "continues the study")
     print(json.dumps(result) if args.json else json.dumps(result, indent=1))
-    return 1 if failed else 0
+    return 130 if result.get("stopped") else (1 if failed else 0)
 
 
 def cmd_info(args) -> int:
@@ -217,6 +228,9 @@ def make_parser() -> argparse.ArgumentParser:
     study.add_argument("--threads-per-worker", type=int, default=1, help="numba threads of each run")
     study.add_argument("--scheduler", help="address of a running Dask scheduler (instead of a LocalCluster)")
     study.add_argument("--report", action="store_true", help="only write the report of a study folder")
+    study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
+    study.add_argument("--stop", action="store_true",
+                       help="ask the study running in this folder to stop (its runs checkpoint first)")
     study.add_argument("--json", action="store_true", help="the result as one JSON line")
     study.set_defaults(func=cmd_study)
     sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import signal
 import time as _time
 from dataclasses import asdict
+from pathlib import Path
 
 from .case import Case, to_toml
 from .dem.system import SimulationError
@@ -35,8 +36,11 @@ class Simulation:
     """
 
     def __init__(self, case: Case, out_dir=None, *, overwrite: bool = False, resume: bool = False,
-                 progress: bool | None = None, threads: int | None = None):
+                 progress: bool | None = None, threads: int | None = None, stop_file=None):
         self.case = case
+        # a file whose appearance stops the run like SIGTERM (checkpoint written): how a study stops
+        # runs inside Dask workers, where signals do not reach them
+        self._stop_file = Path(stop_file) if stop_file is not None else None
         self.threads = set_threads(case.run.threads if threads is None else threads)
         self.progress = case.output.progress if progress is None else progress
         self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
@@ -98,6 +102,8 @@ class Simulation:
                 chunk_start = _time.perf_counter()
                 self.model.advance(target - step)
                 self.watch.cost(target - step, _time.perf_counter() - chunk_start)
+                if self._stop_file is not None and self._stop_file.exists():
+                    self._stop_requested = True
                 events_start = _time.perf_counter()
                 self._write_guarded(self._on_events, self.step_count)
                 self.model.timings.add("output", _time.perf_counter() - events_start)

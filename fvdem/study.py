@@ -15,6 +15,7 @@ them start from, the axes to vary, exclusions, the duration and replicas::
     case = "../cases/ar1.toml"
     bed = "small"                      # particles.initial_state = the bed's final state
     set = {"particles.count" = 300}
+    duration = 0.08                    # optional: this family's own duration
     [axes]
     "gas.u_over_umf" = [2.0, 2.9]
     [[exclude]]                        # drop the runs that match every key given
@@ -29,20 +30,29 @@ default, the ``--scheduler`` of a running cluster, or a dask-jobqueue cluster fr
 run's folder is ``OUT/runs/<name>``, a bed's ``OUT/beds/<name>``. A finished run (its summary
 reached the duration) is skipped, an interrupted one resumed from its checkpoint (also when Dask
 retries a task whose worker died), and a failed one reported with its cause without stopping the
-others. Every case is checked before anything runs.
+others. Every case is checked before anything runs. Runs start longest first (most DEM steps
+left), so the last to finish is not a long one begun late.
+
+Stopping: Ctrl-C or SIGTERM to ``fvdem study``, or ``fvdem study OUT --stop`` from anywhere, writes
+``OUT/STOP``; each running run then checkpoints at its next chunk and returns ``stopped``, runs not
+started do not start, and the same command continues later. ``--only NAME ...`` runs some of the
+runs; ``study.json`` keeps the others' last results.
 """
 from __future__ import annotations
 
 import itertools
 import json
 import math
+import signal
 import os
 import time
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .case import CaseError, load_case
+
+STOP_FILE = "STOP"  # in a study folder: running runs checkpoint and stop, queued ones do not start
 
 STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
               "cluster"}
@@ -60,6 +70,7 @@ class RunSpec:
     folder: str
     bed: str | None = None  # name of the bed it starts from
     point: dict = field(default_factory=dict)  # the axes' values of this run
+    duration: float = 0.0  # simulated seconds (the study's, or its family's own)
 
 
 @dataclass(frozen=True)
@@ -120,10 +131,10 @@ def load_study(path, out) -> Study:
         if not isinstance(spec, dict) or "case" not in spec:
             _problem(problems, f"{kind}.{key}", spec, "a table with case = 'path of a case file'")
             return None, {}
-        unknown = set(spec) - {"case", "set", "bed"} - ({"bed"} if kind == "families" else set())
+        unknown = set(spec) - {"case", "set"} - ({"bed", "duration"} if kind == "families" else set())
         for k in sorted(unknown):
             _problem(problems, f"{kind}.{key}.{k}", spec[k], "unknown key; allowed: case, set" +
-                     (", bed" if kind == "families" else ""))
+                     (", bed, duration" if kind == "families" else ""))
         case_path = (base / spec["case"]).resolve()
         if not case_path.is_file():
             _problem(problems, f"{kind}.{key}.case", spec["case"], f"no such case file ({case_path})")
@@ -150,6 +161,11 @@ def load_study(path, out) -> Study:
         if not case_path:
             continue
         bed = spec.get("bed")
+        family_duration = spec.get("duration", duration)
+        if "duration" in spec and (not isinstance(family_duration, (int, float)) or isinstance(family_duration, bool)
+                                   or not 0 < family_duration < 1e6):
+            _problem(problems, f"families.{family}.duration", family_duration, "a number of simulated seconds > 0")
+            family_duration = duration
         if bed is not None and bed not in bed_names:
             _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
         for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
@@ -160,10 +176,12 @@ def load_study(path, out) -> Study:
                 label = "_".join(f"{k.split('.')[-1]}{v:g}" if isinstance(v, (int, float)) else f"{k.split('.')[-1]}{v}"
                                  for k, v in point.items())
                 run_name = "_".join(x for x in (family, label, f"r{replica}" if replicas > 1 else "") if x)
-                overrides = {**settings, **sets, **point, "time.end": float(duration or 0)}
+                run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
+                overrides = {**settings, **sets, **point, "time.end": run_duration}
                 if replicas > 1:
                     overrides["particles.insertion.seed"] = replica
-                runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name), bed, point))
+                runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name), bed, point,
+                                    run_duration))
     cluster = _table(table, "cluster", problems)
     kind = cluster.get("kind", "local")
     if kind not in CLUSTER_KINDS:
@@ -200,22 +218,55 @@ def _finished(folder: Path, end: float) -> bool:
     return not data.get("stopped_early") and (data.get("settled") or data["simulated_time"] >= end * (1 - 1e-9))
 
 
+def _study_stop_file(folder) -> Path:
+    """``OUT/STOP`` of the study that ``folder`` (``OUT/runs/<name>`` or ``OUT/beds/<name>``) belongs to."""
+    return Path(folder).parent.parent / STOP_FILE
+
+
+def _simulated_so_far(folder: Path) -> float:
+    """Simulated seconds a run folder holds: its summary's, else its checkpoint's (0 for a new run)."""
+    summary = folder / "summary.json"
+    try:
+        if summary.exists():
+            return float(json.loads(summary.read_text())["simulated_time"])
+        if (folder / "checkpoint.npz").exists():
+            import numpy as np
+            with np.load(folder / "checkpoint.npz") as data:
+                return float(json.loads(bytes(data["__meta__"]).decode())["time"]) if "__meta__" in data.files else 0.0
+    except (OSError, KeyError, ValueError):
+        pass
+    return 0.0
+
+
 def _simulate(case_path, overrides, folder, threads) -> dict:
-    """Run (or resume, or skip) one case into ``folder``; returns status and summary."""
+    """Run (or resume, or skip) one case into ``folder``; returns status and summary. A run stopped
+    through the study's stop file checkpoints and comes back ``stopped``."""
     from .simulation import Simulation
     folder = Path(folder)
     case = load_case(case_path, {**overrides, "output.progress": False})
     if _finished(folder, case.time.end):
         return {"status": "skipped", "summary": json.loads((folder / "summary.json").read_text())}
+    stop_file = _study_stop_file(folder)
+    if stop_file.exists():
+        return {"status": "stopped", "summary": {"simulated_time": _simulated_so_far(folder), "stopped_early": True}}
     resume = (folder / "checkpoint.npz").exists()
-    summary = Simulation(case, folder, resume=resume, overwrite=not resume, threads=threads, progress=False).run()
+    summary = Simulation(case, folder, resume=resume, overwrite=not resume, threads=threads, progress=False,
+                         stop_file=stop_file).run()
+    if summary.get("stopped_early"):
+        return {"status": "stopped", "summary": summary}
     return {"status": "resumed" if resume else "finished", "summary": summary}
 
 
 def prepare_bed(bed: BedSpec, threads: int) -> str:
     """A settled bed's final state (prepared once; the runs starting from it depend on this task)."""
-    _simulate(bed.case, bed.overrides, bed.folder, threads)
+    outcome = _simulate(bed.case, bed.overrides, bed.folder, threads)
+    if outcome["status"] == "stopped":
+        raise StudyStopped(f"bed {bed.name} stopped before it settled")
     return str(Path(bed.folder) / "final_state.npz")
+
+
+class StudyStopped(RuntimeError):
+    """The study was asked to stop (its stop file) before this task finished."""
 
 
 def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
@@ -323,41 +374,109 @@ def map_tasks(function, items, names, *, threads=1, scheduler=None, workers=None
     return [results[name] for name in names]
 
 
+def select_runs(study: Study, only) -> Study:
+    """The study with only the runs named in ``only`` (and the beds they start from); ``CaseError``
+    naming the study's runs for a name it does not have."""
+    if not only:
+        return study
+    names = {r.name for r in study.runs}
+    unknown = [n for n in only if n not in names]
+    if unknown:
+        raise CaseError([f"--only: {', '.join(unknown)}: not a run of study {study.name}; its runs are "
+                         f"{', '.join(r.name for r in study.runs)}"])
+    runs = tuple(r for r in study.runs if r.name in set(only))
+    beds = tuple(b for b in study.beds if b.name in {r.bed for r in runs})
+    return replace(study, runs=runs, beds=beds)
+
+
+def request_stop(out) -> Path:
+    """Ask the study running in ``out`` to stop: its runs checkpoint and end, queued runs do not start."""
+    path = Path(out) / STOP_FILE
+    path.write_text("stop requested\n")
+    return path
+
+
+def _priority(run: RunSpec) -> int:
+    """Longest first: DEM steps left (duration minus what the folder holds, over the DEM step)."""
+    try:
+        dem_step = float(load_case(run.case, dict(run.overrides)).time.dem_step)
+    except CaseError:
+        return 0
+    left = max(0.0, run.duration - _simulated_so_far(Path(run.folder)))
+    return int(left / dem_step)
+
+
 def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print) -> dict:
-    """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``)."""
+    """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``).
+    SIGINT/SIGTERM (main thread) or ``request_stop(out)`` stop it with every running run checkpointed."""
     from distributed import as_completed
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.toml").write_text(Path(study.path).read_text())
+    (out / STOP_FILE).unlink(missing_ok=True)  # a stop request belongs to the invocation it stopped
+    stop_requested = []
+
+    def on_signal(signum, _frame):
+        if not stop_requested:
+            log(f"stopping (signal {signum}): each running run checkpoints at its next chunk; the same command "
+                "continues the study")
+        stop_requested.append(signum)
+        request_stop(out)
+
+    handlers = {}
+    try:
+        handlers = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:  # not the main thread: request_stop(out) still stops the study
+        pass
     started = time.perf_counter()
     client, description = make_client(study.cluster, scheduler, workers, threads)
     try:
-        beds = {b.name: client.submit(prepare_bed, b, threads, key=f"bed-{b.name}", pure=False) for b in study.beds}
+        beds = {b.name: client.submit(prepare_bed, b, threads, key=f"bed-{b.name}", pure=False, priority=10**12)
+                for b in study.beds}
         futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"run-{r.name}",
-                                 pure=False) for r in study.runs]
-        total = len(futures) * study.duration
+                                 pure=False, priority=_priority(r)) for r in study.runs]
+        total = sum(r.duration for r in study.runs)
         results, done = [], 0.0
         for future in as_completed(futures):
             try:
                 result = future.result()
-            except Exception as exc:  # noqa: BLE001  (a bed failed: its runs cannot start)
+            except Exception as exc:  # noqa: BLE001  (a bed failed or was stopped: its runs cannot start)
                 name = future.key.removeprefix("run-") if isinstance(future.key, str) else str(future.key)
                 run = next(r for r in study.runs if r.name == name)
-                result = {"name": name, "family": run.family, "status": "failed", "folder": run.folder, "t95": None,
-                          "error": f"{type(exc).__name__}: {exc}", "simulated_seconds": 0.0, "point": run.point}
+                stopped = isinstance(exc, StudyStopped) or (out / STOP_FILE).exists()
+                result = {"name": name, "family": run.family, "status": "stopped" if stopped else "failed",
+                          "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
+                          **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
             results.append(result)
-            done += study.duration if result["status"] != "failed" else 0.0
+            done += result.get("simulated_seconds", 0.0) if result["status"] != "failed" else 0.0
             detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None else "t95 -")
             log(progress_line(len(results), len(futures), result["name"], result["status"], detail, started,
                               done, total, " simulated s"))
     finally:
         close_client(client)
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
     order = {r.name: k for k, r in enumerate(study.runs)}
     results.sort(key=lambda r: order[r["name"]])
-    summary = {"study": study.name, "scheduler": description, "runs": results,
+    summary = {"study": study.name, "scheduler": description, "runs": _merged(out, study, results),
                "wall_seconds": time.perf_counter() - started}
+    if (out / STOP_FILE).exists():
+        summary["stopped"] = True
     (out / "study.json").write_text(json.dumps(summary, indent=1) + "\n")
     return summary
+
+
+def _merged(out: Path, study: Study, results: list) -> list:
+    """This invocation's results, after the last recorded results of the runs it did not run (``--only``)."""
+    path = out / "study.json"
+    ran = {r["name"] for r in results}
+    earlier = []
+    if path.exists():
+        try:
+            earlier = [r for r in json.loads(path.read_text()).get("runs", []) if r.get("name") not in ran]
+        except (OSError, json.JSONDecodeError):
+            earlier = []
+    return earlier + results
 
 
 def _pairs(runs, first, second) -> dict:

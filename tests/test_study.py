@@ -133,9 +133,18 @@ def test_the_papers_study_and_its_subset_are_the_runs_the_issue_names(tmp_path):
     assert families["ar1"] == families["ar4_mp"] == families["ar4_sp"] == [1.6, 1.7, 2.0, 2.3, 2.6, 2.9]
     assert families["ar4_mp_drag"] == [1.6, 1.7, 2.0, 2.9]
     subset = load_study(ROOT / "studies" / "mema2020_subset.toml", tmp_path)
-    assert sorted(r.name for r in subset.runs) == ["ar1_u_over_umf2", "ar1_u_over_umf2.9", "ar4_mp_drag_u_over_umf2",
-                                                   "ar4_mp_u_over_umf2", "ar4_mp_u_over_umf2.9"]
-    assert subset.duration >= 6 and all(r.overrides["contact.normal_stiffness"] == 800.0 for r in subset.runs)
+    assert sorted(r.name for r in subset.runs) == ["ar1_paper_u_over_umf2.9", "ar1_u_over_umf2", "ar1_u_over_umf2.9",
+                                                   "ar4_mp_drag_u_over_umf2", "ar4_mp_u_over_umf2",
+                                                   "ar4_mp_u_over_umf2.9"]
+    defaults = [r for r in subset.runs if r.family != "ar1_paper"]
+    assert subset.duration >= 6 and all(r.duration == subset.duration for r in defaults)
+    assert all(r.overrides["contact.normal_stiffness"] == 800.0 for r in defaults)
+    # one point repeated at the paper's own settings, from a bed settled at them
+    paper = next(r for r in subset.runs if r.family == "ar1_paper")
+    assert paper.overrides["contact.normal_stiffness"] == 2.0e4 and paper.overrides["time.dem_step"] == 1e-5
+    assert paper.overrides["time.end"] == paper.duration == 4.5 and paper.bed == "ar1_paper"
+    bed = next(b for b in subset.beds if b.name == "ar1_paper")
+    assert bed.overrides["contact.normal_stiffness"] == 2.0e4 and bed.overrides["time.dem_step"] == 1e-5
     assert all(r.overrides["gas.inlet_ramp"] == 1.0 for r in full.runs + subset.runs)
 
 
