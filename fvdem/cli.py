@@ -125,7 +125,8 @@ def cmd_study(args) -> int:
         return _fail(f"--threads-per-worker {args.threads_per_worker}: at least 1")
     study = select_runs(load_study(target, args.out), args.only)
     log = (lambda line: print(line, file=sys.stderr, flush=True))
-    log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {study.duration:g} s into {args.out}")
+    durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
+    log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {durations} s into {args.out}")
     result = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers,
                        threads=args.threads_per_worker, log=log)
     for path in report(args.out):

@@ -44,6 +44,7 @@ import itertools
 import json
 import math
 import signal
+import threading
 import os
 import time
 import tomllib
@@ -303,9 +304,21 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
     kind = cluster.get("kind", "local")
     count = workers or cluster.get("workers") or max(1, (os.cpu_count() or 1) // max(1, threads))
     if kind == "local":
-        local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=None,
-                             **options)
-        return Client(local), f"LocalCluster({count} workers x {threads} numba threads)"
+        # Ctrl-C on a terminal signals the whole process group: the local workers ignore SIGINT (set
+        # while they are spawned, and again by a plugin on any worker that replaces one), so that the
+        # study's own handler stops the runs with checkpoints instead of the workers dying mid-run
+        previous = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
+        if previous is not None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=None,
+                                 **options)
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
+        client = Client(local)
+        client.register_plugin(IgnoreInterrupt())
+        return client, f"LocalCluster({count} workers x {threads} numba threads)"
     try:
         import dask_jobqueue
     except ImportError:
@@ -314,6 +327,24 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
     jobs = getattr(dask_jobqueue, cluster_class)(**options)
     jobs.scale(jobs=count)
     return Client(jobs), f"{cluster_class}({count} jobs)"
+
+
+try:
+    from distributed.diagnostics.plugin import WorkerPlugin
+except ImportError:  # pragma: no cover - a dependency
+    WorkerPlugin = object
+
+
+class IgnoreInterrupt(WorkerPlugin):
+    """A local worker ignores SIGINT (the terminal's Ctrl-C reaches the whole process group)."""
+
+    name = "fvdem-ignore-sigint"
+
+    def setup(self, worker):
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        except ValueError:  # not the worker's main thread
+            pass
 
 
 def close_client(client) -> None:
@@ -403,7 +434,7 @@ def _priority(run: RunSpec) -> int:
     except CaseError:
         return 0
     left = max(0.0, run.duration - _simulated_so_far(Path(run.folder)))
-    return int(left / dem_step)
+    return int(round(left / dem_step))
 
 
 def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print) -> dict:

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from fvdem.case import CaseError
-from fvdem.study import RunSpec, load_study, run_task
+from fvdem.study import STOP_FILE, RunSpec, _merged, _priority, load_study, request_stop, run_task, select_runs
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOKE = ROOT / "studies" / "smoke.toml"
@@ -224,3 +224,136 @@ def test_the_tools_sweeps_run_module_level_functions_the_engine_can_ship():
             assert "ProcessPoolExecutor" not in Path(tool.__file__).read_text()
     finally:
         sys.path.remove(str(ROOT / "tools"))
+
+
+def test_only_selects_runs_and_their_beds_and_refuses_a_name_the_study_lacks(tmp_path):
+    study = load_study(SMOKE, tmp_path)
+    one = select_runs(study, ["ar1_u_over_umf2.9"])
+    assert [r.name for r in one.runs] == ["ar1_u_over_umf2.9"] and [b.name for b in one.beds] == ["small"]
+    assert select_runs(study, None) is study
+    with pytest.raises(CaseError) as err:
+        select_runs(study, ["ar1_u_over_umf3"])
+    assert "ar1_u_over_umf3" in str(err.value) and "ar1_u_over_umf2.9" in str(err.value)
+    result = subprocess.run([sys.executable, "-m", "fvdem", "study", str(SMOKE), "--out", str(tmp_path / "s"),
+                             "--only", "nope"], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "Traceback" not in result.stderr and "nope" in result.stderr
+
+
+def test_a_familys_own_duration_and_a_wrong_one(tmp_path):
+    text = SMOKE.read_text().replace('bed = "small"', 'bed = "small"\nduration = 0.05', 1)
+    path = tmp_path / "study.toml"
+    path.write_text(text.replace('"../cases/', f'"{ROOT / "cases"}/'))
+    runs = load_study(path, tmp_path / "out").runs
+    assert all(r.duration == 0.05 and r.overrides["time.end"] == 0.05 for r in runs)
+    path.write_text(text.replace('"../cases/', f'"{ROOT / "cases"}/').replace("duration = 0.05", 'duration = "long"'))
+    with pytest.raises(CaseError) as err:
+        load_study(path, tmp_path / "out")
+    assert "families.ar1.duration" in str(err.value) and "'long'" in str(err.value)
+
+
+def _small_run(tmp_path, end):
+    bed_case = ROOT / "cases" / "demo.toml"
+    out = tmp_path / "study"
+    folder = out / "runs" / "demo"
+    return out, RunSpec("demo", "demo", str(bed_case), {"time.end": end, "output.vtk": False,
+                                                       "output.checkpoint_interval": 0.002,
+                                                       "output.timeseries_interval": 0.001,
+                                                       "particles.count": 150}, str(folder), None, {}, end)
+
+
+def test_the_stop_file_checkpoints_a_running_run_and_keeps_queued_runs_from_starting(tmp_path):
+    """A run polls its study's STOP file between chunks: it stops with a checkpoint, comes back
+    'stopped', does not count as finished, and the next invocation resumes it to the end."""
+    out, run = _small_run(tmp_path, 0.02)
+    out.mkdir(parents=True)
+    request_stop(out)  # before the start: the run does not start
+    assert run_task(run, 1)["status"] == "stopped" and not Path(run.folder).exists()
+    (out / STOP_FILE).unlink()
+
+    import fvdem.simulation as simulation
+    original = simulation.Model.advance
+
+    def advance_then_stop(self, steps):  # the request arrives while the run is running
+        original(self, steps)
+        if self.time >= 0.004:
+            request_stop(out)
+    simulation.Model.advance = advance_then_stop
+    try:
+        stopped = run_task(run, 1)
+    finally:
+        simulation.Model.advance = original
+    assert stopped["status"] == "stopped" and 0.004 <= stopped["simulated_seconds"] < 0.02
+    assert (Path(run.folder) / "checkpoint.npz").exists()
+    (out / STOP_FILE).unlink()
+    resumed = run_task(run, 1)
+    assert resumed["status"] == "resumed" and resumed["simulated_seconds"] == pytest.approx(0.02)
+    assert run_task(run, 1)["status"] == "skipped"
+
+
+def test_a_partial_invocation_keeps_the_other_runs_results(tmp_path):
+    out = tmp_path / "study"
+    out.mkdir()
+    (out / "study.json").write_text(json.dumps({"runs": [{"name": "a", "status": "finished", "t95": 1.0},
+                                                         {"name": "b", "status": "failed"}]}))
+    merged = _merged(out, None, [{"name": "b", "status": "finished", "t95": 2.0}])
+    assert [(r["name"], r["status"]) for r in merged] == [("a", "finished"), ("b", "finished")]
+
+
+def test_runs_with_more_dem_steps_left_start_first(tmp_path):
+    study = load_study(ROOT / "studies" / "mema2020_subset.toml", tmp_path)
+    priority = {r.name: _priority(r) for r in study.runs}
+    # 4.5 s at the paper's 1e-5 s DEM step is more steps than 6 s at the defaults' 5e-5 s
+    assert priority["ar1_paper_u_over_umf2.9"] == pytest.approx(4.5 / 1e-5, rel=1e-6)
+    assert priority["ar1_u_over_umf2"] == pytest.approx(6.0 / 5e-5, rel=1e-6)
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_study_with_its_runs_checkpointed_and_the_same_command_continues(tmp_path):
+    """SIGINT to `fvdem study` while a run is past its first checkpoint: the run checkpoints at its
+    next chunk (not at its last scheduled checkpoint), the study exits 130 naming the stopped run,
+    and the same command resumes it to the end; `--stop` asks the same from another process."""
+    import signal
+    import time
+    study = tmp_path / "stop.toml"
+    study.write_text(f'''name = "stop"
+duration = 0.3
+[settings]
+"output.vtk" = false
+"output.checkpoint_interval" = 0.1
+"output.timeseries_interval" = 0.005
+[families.small]
+case = "{ROOT / 'cases' / 'demo.toml'}"
+[families.small.set]
+"particles.count" = 150
+[axes]
+"gas.u_over_umf" = [2.0]
+''')
+    out = tmp_path / "study"
+    command = [sys.executable, "-m", "fvdem", "study", str(study), "--out", str(out), "--workers", "1", "--json"]
+    # its own process group, signalled as a whole: what Ctrl-C on a terminal does (the workers get it too)
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    folder = out / "runs" / "small_u_over_umf2"
+    deadline = time.time() + 300
+    while not (folder / "checkpoint.npz").exists() and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.2)
+    assert (folder / "checkpoint.npz").exists(), "the run never wrote a checkpoint"
+    import os
+    os.killpg(proc.pid, signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=300)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr and "stopped: 1 run(s)" in stderr
+    result = json.loads(stdout.strip().splitlines()[-1])
+    (run,) = result["runs"]
+    assert result["stopped"] and run["status"] == "stopped" and 0.1 <= run["simulated_seconds"] < 0.3
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["stopped_early"]
+    # the checkpoint is the stop's, not the last scheduled one
+    from fvdem.io.checkpoint import load_checkpoint
+    assert load_checkpoint(folder / "checkpoint.npz")[1]["time"] == pytest.approx(run["simulated_seconds"])
+    again = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    (run,) = json.loads(again.stdout.strip().splitlines()[-1])["runs"]
+    assert run["status"] == "resumed" and run["simulated_seconds"] == pytest.approx(0.3)
+    stop = subprocess.run([sys.executable, "-m", "fvdem", "study", str(out), "--stop"], capture_output=True,
+                          text=True, timeout=120)
+    assert stop.returncode == 0 and (out / "STOP").exists()
