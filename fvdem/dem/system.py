@@ -31,7 +31,7 @@ from .particles import ParticleArrays
 # The adaptive skin (``DEMSystem(..., skin=None)``): at each rebuild the skin is scaled by
 # sqrt(SKIN_TARGET_INTERVAL / steps since the last rebuild), within SKIN_RANGE smallest diameters.
 # Measured on the subset study's fluidized 32,500-particle beds at 2.9 Umf (docs/benchmarks.md, "The
-# neighbour list in a moving bed"): a rebuild costs 5-10 DEM steps' contact forces, so the optimum is
+# neighbour list in a moving bed"): a rebuild costs 3-4 DEM steps' contact forces, so the optimum is
 # near 8 steps between rebuilds for rods and flat from 7 to 20 for spheres; at the old fixed 0.1 d the
 # bed rebuilt every 2 (rods) to 4 (spheres) steps. A settled bed keeps the floor, 0.1 d.
 SKIN_TARGET_INTERVAL = 8
