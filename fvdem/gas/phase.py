@@ -199,6 +199,10 @@ class GasPhase:
         s.voidage_old = s.voidage.copy()
         counters = [int(v) for v in data["gas.counters"]] + [0, 0]  # older checkpoints: 3 counters
         self.step_count, since_factor, s.factorizations, iterations_since, refactor_due = counters[:5]
+        if self.inlet_ramp > 0.0:
+            # the inlet as the uninterrupted run left it: __init__ set it to 0 for the ramp's start, and
+            # the ramp only updates it while it lasts (a run resumed after its end kept no inflow at all)
+            s.set_inlet_velocity(self.inlet_velocity_at(self.step_count * self.dt))
         if "gas.preconditioner.data" in data:
             import scipy.sparse as sp
             matrix = sp.csc_matrix((data["gas.preconditioner.data"], data["gas.preconditioner.indices"],
