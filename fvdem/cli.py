@@ -104,7 +104,7 @@ def cmd_compare(args) -> int:
 
 
 def cmd_study(args) -> int:
-    from .study import load_study, report, request_stop, run_study, select_runs
+    from .study import load_study, report, request_stop, run_study, select_runs, write_index
     target = Path(args.study)
     if args.stop:
         if not target.is_dir() or not (target / "study.toml").exists():
@@ -117,6 +117,13 @@ def cmd_study(args) -> int:
         if not (target / "study.json").exists():
             return _fail(f"{target} is not a study folder (no study.json)")
         for path in report(target):
+            print(path)
+        return 0
+    if args.report and args.out:  # a study file and its folder: report what the folder holds now
+        if not Path(args.out).is_dir():
+            return _fail(f"--out {args.out}: no such study folder")
+        write_index(args.out, load_study(target, args.out))
+        for path in report(args.out):
             print(path)
         return 0
     if not args.out:

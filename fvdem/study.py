@@ -36,7 +36,8 @@ left), so the last to finish is not a long one begun late.
 Stopping: Ctrl-C or SIGTERM to ``fvdem study``, or ``fvdem study OUT --stop`` from anywhere, writes
 ``OUT/STOP``; each running run then checkpoints at its next chunk and returns ``stopped``, runs not
 started do not start, and the same command continues later. ``--only NAME ...`` runs some of the
-runs; ``study.json`` keeps the others' last results.
+runs; ``study.json`` keeps the others' last results. ``study.json`` lists every run from the start
+(``pending`` until its result comes), so ``fvdem study DIR --report`` works while a study runs.
 """
 from __future__ import annotations
 
@@ -468,6 +469,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                                  pure=False, priority=_priority(r)) for r in study.runs]
         total = sum(r.duration for r in study.runs)
         results, done = [], 0.0
+        write_index(out, study, description=description)
         for future in as_completed(futures):
             try:
                 result = future.result()
@@ -483,13 +485,13 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None else "t95 -")
             log(progress_line(len(results), len(futures), result["name"], result["status"], detail, started,
                               done, total, " simulated s"))
+            write_index(out, study, results, description)
     finally:
         close_client(client)
         for sig, handler in handlers.items():
             signal.signal(sig, handler)
-    order = {r.name: k for k, r in enumerate(study.runs)}
-    results.sort(key=lambda r: order[r["name"]])
-    summary = {"study": study.name, "scheduler": description, "runs": _merged(out, study, results),
+    index = write_index(out, study, results, description)
+    summary = {"study": study.name, "scheduler": description, "runs": index["runs"],
                "wall_seconds": time.perf_counter() - started}
     if (out / STOP_FILE).exists():
         summary["stopped"] = True
@@ -497,17 +499,48 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
     return summary
 
 
-def _merged(out: Path, study: Study, results: list) -> list:
-    """This invocation's results, after the last recorded results of the runs it did not run (``--only``)."""
+def _pending(run: RunSpec) -> dict:
+    return {"name": run.name, "family": run.family, "status": "pending", "folder": run.folder, "t95": None,
+            "point": run.point, "simulated_seconds": _simulated_so_far(Path(run.folder))}
+
+
+def write_index(out, study: Study, results=(), description: str | None = None) -> dict:
+    """``study.json``: every run of ``study`` with its latest result (``results``, else the one on
+    record, else ``pending`` with the simulated seconds its folder holds), so that ``--report`` works
+    while a study runs. Returns the index written."""
+    out = Path(out)
     path = out / "study.json"
-    ran = {r["name"] for r in results}
-    earlier = []
+    record = {}
     if path.exists():
         try:
-            earlier = [r for r in json.loads(path.read_text()).get("runs", []) if r.get("name") not in ran]
+            record = json.loads(path.read_text())
         except (OSError, json.JSONDecodeError):
-            earlier = []
-    return earlier + results
+            record = {}
+    latest = {r["name"]: r for r in record.get("runs", [])}
+    latest.update({r["name"]: r for r in results})
+    names = [r.name for r in study.runs]
+    runs = [latest.get(r.name) or _pending(r) for r in study.runs] + [r for n, r in latest.items() if n not in names]
+    index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name,
+             **({"scheduler": description} if description else {}), "runs": runs}
+    path.write_text(json.dumps(index, indent=1) + "\n")
+    return index
+
+
+def _so_far(folder: Path) -> dict:
+    """A run in progress from its time series: t95 (None if not yet mixed), simulated seconds, and the
+    bed pressure drop over W/A and its fluctuation over the second half of what it holds."""
+    import numpy as np
+    from .analysis.mixing import mixing_time
+    from .analysis.plots import read_timeseries
+    series = read_timeseries(folder)
+    times = series["time"]
+    out = {"simulated_time": float(times[-1]) if len(times) else 0.0,
+           "t95": mixing_time(times, series["mixing_entropy"]) if "mixing_entropy" in series else None}
+    if "pressure_drop_over_weight" in series and len(times) > 1:
+        half = series["pressure_drop_over_weight"][times >= 0.5 * times[-1]]
+        out["pressure_drop_over_weight"] = float(np.mean(half))
+        out["pressure_drop_std_over_weight"] = float(np.std(half))
+    return out
 
 
 def _pairs(runs, first, second) -> dict:
@@ -518,27 +551,37 @@ def _pairs(runs, first, second) -> dict:
     return {point: (fam[first], fam[second]) for point, fam in by.items() if first in fam and second in fam}
 
 
-def plot_void_fractions(runs, path, below=0.3):
-    """Histograms of the cell void fraction below ``below`` [m] over each run's gas snapshots (the
-    first, the initial state, left out), on one chart (seed 000 Fig. 7)."""
+def void_fraction_samples(folder, below=0.3):
+    """Cell void fractions of the cells whose centres are below ``below`` [m], over the second half of
+    a run's gas snapshots (the fluidized state, not the start-up), pooled; empty without snapshots."""
     import meshio
     import numpy as np
-    from .analysis.mixing import void_fraction_histogram
+    snapshots = sorted(Path(folder).glob("gas_*.vtu"))
+    values = []
+    for snapshot in snapshots[len(snapshots) // 2:] if len(snapshots) > 1 else []:
+        grid = meshio.read(snapshot)
+        centres = grid.points[grid.cells[0].data].mean(axis=1)
+        values.append(np.asarray(grid.cell_data["voidage"][0])[centres[:, 2] < below])
+    return np.concatenate(values) if values else np.zeros(0)
+
+
+def plot_void_fractions(runs, path, below=0.3):
+    """Histograms of the cell void fraction below ``below`` [m] over the second half of each run's gas
+    snapshots, on one chart, with each run's binarity (``void_fraction_binarity``; seed 000 Fig. 7)."""
+    import numpy as np
+    from .analysis.mixing import void_fraction_binarity
     from .analysis.plots import _pyplot, _save
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     for r in runs:
-        values, centres = [], None
-        for snapshot in sorted(Path(r["folder"]).glob("gas_*.vtu"))[1:]:
-            grid = meshio.read(snapshot)
-            centres = grid.points[grid.cells[0].data].mean(axis=1)
-            values.append(grid.cell_data["voidage"][0])
-        if values:
-            counts, edges = void_fraction_histogram(np.concatenate(values), np.tile(centres, (len(values), 1)), below)
-            ax.step(0.5 * (edges[1:] + edges[:-1]), counts, where="mid", label=f"{r['name']} ({len(values)} snapshots)")
+        values = void_fraction_samples(r["folder"], below)
+        if values.size:
+            counts, edges = np.histogram(values, bins=20, range=(0.0, 1.0), density=True)
+            ax.step(0.5 * (edges[1:] + edges[:-1]), counts, where="mid",
+                    label=f"{r['name']} (binarity {void_fraction_binarity(values):.2f})")
     ax.set_xlabel("cell void fraction")
     ax.set_ylabel("probability density")
-    ax.set_title(f"cells below z = {below} m")
+    ax.set_title(f"cells below z = {below} m, second half of the run")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     return _save(fig, Path(path))
@@ -567,15 +610,24 @@ def report(out) -> list:
             paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{tag}.png"))
             if figure == "fig3":
                 paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{tag}.png"))
+    from .analysis.mixing import void_fraction_binarity
     rows = []
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
+        if (not data or data.get("stopped_early")) and (Path(r["folder"]) / "timeseries.csv").exists():
+            data = {**data, **_so_far(Path(r["folder"]))}  # a run in progress: what its time series holds
+            r = {**r, "t95": data["t95"]}
+        samples = void_fraction_samples(r["folder"]) if r["status"] != "failed" else []
+        binarity = void_fraction_binarity(samples) if len(samples) else None
         rows.append({"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"],
                      "t95": r.get("t95"), "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
                      "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
-                                                       if "bed_pressure_drop_std_second_half" in data else None),
-                     "bed_height": data.get("bed_height"), "wall_seconds": data.get("wall_seconds")})
+                                                       if "bed_pressure_drop_std_second_half" in data
+                                                       else data.get("pressure_drop_std_over_weight")),
+                     "bed_height": data.get("bed_height"), "wall_seconds": data.get("wall_seconds"),
+                     "simulated_seconds": data.get("simulated_time"),
+                     "void_fraction_binarity": None if binarity is None or math.isnan(binarity) else binarity})
     (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
     columns = list(dict.fromkeys(k for row in rows for k in row))
     lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
@@ -587,6 +639,51 @@ def report(out) -> list:
 
 # seed 000's findings (§5-§6) that a study's t95 table can check; each rule sees the runs by family
 CLOSE = 0.10  # relative differences below this need replicas to be told from chaos
+TERMINAL = 0.25  # a terminal t95 within this of the paper's "about" value holds
+SETTINGS_TOLERANCE = 0.15  # t95 at the defaults within this of t95 at the paper's settings: no change
+
+
+def _compare_binarity(rows) -> dict:
+    """AR-1's void fractions below 0.3 m more binary than AR-4 MP's (Fig. 7), at every velocity both ran."""
+    claim = "AR-1 void fractions more binary than AR-4 (Fig. 7)"
+    by = {}
+    for r in rows:
+        if r["family"] in ("ar1", "ar4_mp") and r["status"] != "failed" and r.get("void_fraction_binarity") is not None:
+            by.setdefault(r.get("gas.u_over_umf"), {}).setdefault(r["family"], []).append(r["void_fraction_binarity"])
+    common = sorted(v for v, fam in by.items() if v is not None and len(fam) == 2)
+    if not common:
+        return {"finding": claim, "verdict": "open", "why": "no velocity where AR-1 and AR-4 MP both have gas snapshots"}
+    values, close = {}, []
+    for v in common:
+        a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
+        values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
+        if abs(a - b) < CLOSE * max(a, b) and min(len(by[v]["ar1"]), len(by[v]["ar4_mp"])) < 2:
+            close.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas")
+    rule = "binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run"
+    if close:
+        return {"finding": claim, "verdict": "open", "why": "; ".join(close) + " (too noisy to tell)", "values": values,
+                "rule": rule}
+    holds = all(x["ar1"] > x["ar4_mp"] for x in values.values())
+    return {"finding": claim, "verdict": "holds" if holds else "does not hold", "values": values, "rule": rule}
+
+
+def _defaults_against_paper_settings(rows) -> dict:
+    """The same point at fvdem's defaults (family ``ar1``) and at the paper's settings (``ar1_paper``):
+    t95 within ``SETTINGS_TOLERANCE``, and the bed's pressure drop over W/A beside it."""
+    claim = "fvdem's defaults do not change the mixing (AR-1 at the paper's own settings)"
+    a, b = _t95(rows, "ar1"), _t95(rows, "ar1_paper")
+    common = sorted(set(a) & set(b))
+    if not common:
+        return {"finding": claim, "verdict": "open", "why": "no velocity run both at the defaults and the paper's settings"}
+    drop = {r["family"]: r.get("pressure_drop_over_weight") for r in rows
+            if r["family"] in ("ar1", "ar1_paper") and r.get("gas.u_over_umf") in common}
+    values = {f"{v:g}": {"defaults": a[v], "paper": b[v]} for v in common}
+    values["pressure_drop_over_weight"] = drop
+    if any(None in a[v] or None in b[v] for v in common):
+        return {"finding": claim, "verdict": "open", "why": "not mixed by the run's end (too short)", "values": values}
+    gaps = {f"{v:g}": abs(sum(a[v]) / len(a[v]) - sum(b[v]) / len(b[v])) / (sum(b[v]) / len(b[v])) for v in common}
+    return {"finding": claim, "verdict": "holds" if max(gaps.values()) < SETTINGS_TOLERANCE else "does not hold",
+            "values": values, "gaps": gaps, "rule": f"t95 within {100 * SETTINGS_TOLERANCE:.0f} %"}
 
 
 def _t95(rows, family):
@@ -620,9 +717,12 @@ def _compare(rows, faster, slower, velocities, claim):
 
 
 def check_findings(rows) -> list:
-    """Each finding of seed 000 (§5-§6) that t95 can decide, with fvdem's numbers and one word: holds,
-    does not hold, or open (and why: runs missing, too short to mix, or differences within the noise
-    without replicas). The void-fraction finding (AR-1 more binary than AR-4) is read from Fig. 7."""
+    """Each finding of seed 000 (§5-§6), with fvdem's numbers and one word: holds, does not hold, or
+    open (and why: runs missing, too short to mix, or differences within the noise without replicas).
+    From the t95 table: AR-4 against AR-1 up to 2 Umf, lift and torque, SP against MP, the terminal t95
+    and its change above 2.3 Umf; from the gas snapshots: AR-1's void fractions more binary than AR-4's
+    (``void_fraction_binarity``, Fig. 7); and whether fvdem's defaults change the mixing (a family
+    ``ar1_paper`` at the paper's settings beside ``ar1``)."""
     findings = [
         _compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
         _compare(rows, "ar4_mp", "ar4_mp_drag", lambda v: True, "lift and torque shorten AR-4 mixing"),
@@ -638,20 +738,28 @@ def check_findings(rows) -> list:
         findings.append({"finding": claim, "verdict": "holds" if max(gaps.values()) < 0.2 else "does not hold",
                          "values": gaps, "rule": "t95 within 20 %"})
     for family, paper in (("ar1", 2.6), ("ar4_mp", 2.3)):
-        claim = f"terminal t95 of {family} about {paper} s (paper)"
         t = _t95(rows, family)
-        high = [v for v in t if v >= 2.3]
-        if len(high) < 2:
-            findings.append({"finding": claim, "verdict": "open", "why": "fewer than two velocities at or above 2.3 Umf"})
-        elif any(None in t[v] for v in high):
+        high = sorted(v for v in t if v >= 2.3)
+        claim = f"terminal t95 of {family} about {paper} s (paper)"
+        mixed = [v for v in high if None not in t[v]]
+        if not high:
+            findings.append({"finding": claim, "verdict": "open", "why": "no velocity at or above 2.3 Umf"})
+        elif not mixed:
             findings.append({"finding": claim, "verdict": "open", "why": "not mixed by the run's end (too short)"})
         else:
-            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in sorted(high)}
-            spread = (max(means.values()) - min(means.values())) / max(means.values())
+            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
             terminal = sum(means.values()) / len(means)
-            findings.append({"finding": claim + ", little change above 2.3 Umf",
-                             "verdict": "holds" if spread < 0.2 and abs(terminal / paper - 1) < 0.25 else "does not hold",
-                             "values": means, "rule": "spread < 20 % and mean within 25 % of the paper"})
-    findings.append({"finding": "AR-1 void fractions more binary than AR-4 (Fig. 7)", "verdict": "open",
-                     "why": "read from fig7_void_fraction_*.png; not yet scored"})
+            findings.append({"finding": claim, "verdict": "holds" if abs(terminal / paper - 1) < TERMINAL else "does not hold",
+                             "values": means, "rule": f"mean t95 at or above 2.3 Umf within {100 * TERMINAL:.0f} % of the paper"})
+        claim = f"{family}: little change of t95 above about 2.3 Umf"
+        if len(mixed) < 2:
+            findings.append({"finding": claim, "verdict": "open",
+                             "why": "fewer than two mixed velocities at or above 2.3 Umf"})
+        else:
+            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
+            spread = (max(means.values()) - min(means.values())) / max(means.values())
+            findings.append({"finding": claim, "verdict": "holds" if spread < 0.2 else "does not hold",
+                             "values": means, "rule": "spread below 20 %"})
+    findings.append(_compare_binarity(rows))
+    findings.append(_defaults_against_paper_settings(rows))
     return findings

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from fvdem.case import CaseError
-from fvdem.study import STOP_FILE, RunSpec, _merged, _priority, load_study, request_stop, run_task, select_runs
+from fvdem.study import STOP_FILE, RunSpec, _priority, write_index, load_study, request_stop, run_task, select_runs
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOKE = ROOT / "studies" / "smoke.toml"
@@ -290,13 +290,18 @@ def test_the_stop_file_checkpoints_a_running_run_and_keeps_queued_runs_from_star
     assert run_task(run, 1)["status"] == "skipped"
 
 
-def test_a_partial_invocation_keeps_the_other_runs_results(tmp_path):
+def test_the_index_lists_every_run_and_a_partial_invocation_keeps_the_others_results(tmp_path):
     out = tmp_path / "study"
+    study = load_study(SMOKE, out)
     out.mkdir()
-    (out / "study.json").write_text(json.dumps({"runs": [{"name": "a", "status": "finished", "t95": 1.0},
-                                                         {"name": "b", "status": "failed"}]}))
-    merged = _merged(out, None, [{"name": "b", "status": "finished", "t95": 2.0}])
-    assert [(r["name"], r["status"]) for r in merged] == [("a", "finished"), ("b", "finished")]
+    first, second = (r.name for r in study.runs)
+    index = write_index(out, study)
+    assert [(r["name"], r["status"]) for r in index["runs"]] == [(first, "pending"), (second, "pending")]
+    write_index(out, study, [{"name": first, "status": "finished", "t95": 1.0}])
+    # --only the second: the first keeps its result
+    index = write_index(out, select_runs(study, [second]), [{"name": second, "status": "failed"}])
+    assert {r["name"]: r["status"] for r in index["runs"]} == {first: "finished", second: "failed"}
+    assert json.loads((out / "study.json").read_text())["runs"] == index["runs"]
 
 
 def test_runs_with_more_dem_steps_left_start_first(tmp_path):
@@ -357,3 +362,39 @@ case = "{ROOT / 'cases' / 'demo.toml'}"
     stop = subprocess.run([sys.executable, "-m", "fvdem", "study", str(out), "--stop"], capture_output=True,
                           text=True, timeout=120)
     assert stop.returncode == 0 and (out / "STOP").exists()
+
+
+def test_void_fraction_binarity_is_one_for_packed_or_empty_cells_and_about_a_third_for_a_uniform_spread():
+    import numpy as np
+
+    from fvdem.analysis.mixing import void_fraction_binarity
+    rng = np.random.default_rng(1)
+    binary = np.where(rng.random(20_000) < 0.3, 1.0, 0.4)
+    assert void_fraction_binarity(binary) == pytest.approx(1.0)
+    spread = rng.uniform(0.4, 1.0, 200_000)  # var 0.6^2 / 12 over (mean - a)(1 - mean), a its 2nd percentile
+    assert void_fraction_binarity(spread) == pytest.approx(0.03 / ((0.7 - 0.412) * 0.3), rel=0.01)
+    assert np.isnan(void_fraction_binarity(np.full(10, 0.5))) and np.isnan(void_fraction_binarity([0.5]))
+
+
+def test_the_void_fraction_and_paper_settings_findings_and_little_change_above_2_3():
+    from fvdem.study import check_findings
+
+    def row(family, ratio, t95, binarity=None, drop=1.0):
+        return {"family": family, "status": "finished", "gas.u_over_umf": ratio, "t95": t95,
+                "void_fraction_binarity": binarity, "pressure_drop_over_weight": drop}
+
+    rows = [row("ar1", 2.0, 3.0, 0.62), row("ar4_mp", 2.0, 2.5, 0.41), row("ar1", 2.9, 3.4, 0.70),
+            row("ar4_mp", 2.9, 2.4, 0.45), row("ar1_paper", 2.9, 3.1)]
+    found = {f["finding"]: f for f in check_findings(rows)}
+    binary = found["AR-1 void fractions more binary than AR-4 (Fig. 7)"]
+    assert binary["verdict"] == "holds" and binary["values"]["2.9"] == {"ar1": 0.70, "ar4_mp": 0.45}
+    paper = found["fvdem's defaults do not change the mixing (AR-1 at the paper's own settings)"]
+    assert paper["verdict"] == "holds" and paper["gaps"]["2.9"] == pytest.approx(0.3 / 3.1)  # under 15 %
+    assert found["terminal t95 of ar1 about 2.6 s (paper)"]["verdict"] == "does not hold"  # 3.4 s: +31 %
+    assert found["terminal t95 of ar4_mp about 2.3 s (paper)"]["verdict"] == "holds"  # 2.4 s
+    assert found["ar1: little change of t95 above about 2.3 Umf"]["verdict"] == "open"  # one velocity only
+    rows[-1] = row("ar1_paper", 2.9, None)
+    rows[3] = row("ar4_mp", 2.9, 2.4, 0.68)  # within 10 % of AR-1's 0.70 without replicas
+    found = {f["finding"]: f for f in check_findings(rows)}
+    assert found["fvdem's defaults do not change the mixing (AR-1 at the paper's own settings)"]["verdict"] == "open"
+    assert "too noisy" in found["AR-1 void fractions more binary than AR-4 (Fig. 7)"]["why"]

@@ -76,6 +76,26 @@ def orientation_angles(axis) -> np.ndarray:
     return np.arccos(np.clip(np.abs(np.asarray(axis)[:, 2]), 0.0, 1.0))
 
 
+def void_fraction_binarity(values, packed_percentile: float = 2.0) -> float:
+    """How binary a set of cell void fractions is (seed 000 Fig. 7: AR-1's "more binary" than AR-4's):
+    the variance as a fraction of the largest a variable of the same mean can have between the packed
+    voidage ``a`` (the ``packed_percentile``-th percentile of the values) and 1,
+
+        beta = var(eps) / ((mean - a) (1 - mean))        in [0, 1],
+
+    1 when every cell is either packed or empty (bubbles), 0 when every cell has the same voidage.
+    Dimensionless; NaN for fewer than two values or no spread of the mean from ``a`` or 1."""
+    values = np.asarray(values, float)
+    if values.size < 2:
+        return float("nan")
+    a = float(np.percentile(values, packed_percentile))
+    mean = float(values.mean())
+    room = (mean - a) * (1.0 - mean)
+    if room <= 0.0:
+        return float("nan")
+    return float(min(1.0, max(0.0, values.var() / room)))
+
+
 def void_fraction_histogram(voidage, cell_centres, below: float = 0.3, bins=20):
     """Histogram (density) of the cell voidage of cells with centres below ``below`` [m] (Fig. 7)."""
     values = np.asarray(voidage)[np.asarray(cell_centres)[:, 2] < below]
