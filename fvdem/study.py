@@ -45,6 +45,7 @@ import itertools
 import json
 import math
 import signal
+import sys
 import threading
 import os
 import time
@@ -225,10 +226,15 @@ def _study_stop_file(folder) -> Path:
     return Path(folder).parent.parent / STOP_FILE
 
 
-def _simulated_so_far(folder: Path) -> float:
-    """Simulated seconds a run folder holds: its summary's, else its checkpoint's (0 for a new run)."""
+def _simulated_so_far(folder: Path, live: bool = False) -> float:
+    """Simulated seconds a run folder holds: its summary's, else its checkpoint's (0 for a new run);
+    ``live``: the last line of its time series instead of the checkpoint (a run in progress)."""
     summary = folder / "summary.json"
     try:
+        if summary.exists() and not json.loads(summary.read_text()).get("stopped_early"):
+            return float(json.loads(summary.read_text())["simulated_time"])
+        if live and (folder / "timeseries.csv").exists():
+            return _last_time(folder / "timeseries.csv")
         if summary.exists():
             return float(json.loads(summary.read_text())["simulated_time"])
         if (folder / "checkpoint.npz").exists():
@@ -237,6 +243,21 @@ def _simulated_so_far(folder: Path) -> float:
                 return float(json.loads(bytes(data["__meta__"]).decode())["time"]) if "__meta__" in data.files else 0.0
     except (OSError, KeyError, ValueError):
         pass
+    return 0.0
+
+
+def _last_time(path: Path) -> float:
+    """The time column of a time series' last complete line (read from the end of the file)."""
+    with open(path, "rb") as fh:
+        fh.seek(0, 2)
+        size = fh.tell()
+        fh.seek(max(0, size - 4096))
+        lines = [line for line in fh.read().split(b"\n") if line.strip()]
+    for line in reversed(lines):
+        try:
+            return float(line.split(b",", 1)[0])
+        except ValueError:
+            continue
     return 0.0
 
 
@@ -312,8 +333,8 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
         if previous is not None:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=None,
-                                 **options)
+            local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                 **options)  # any free port: two studies side by side do not clash
         finally:
             if previous is not None:
                 signal.signal(signal.SIGINT, previous)
@@ -438,10 +459,44 @@ def _priority(run: RunSpec) -> int:
     return int(round(left / dem_step))
 
 
-def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print) -> dict:
+class _StudyProgress:
+    """The study's progress view: simulated seconds done over all runs (read from the run folders every
+    ``poll`` seconds), runs done and the time left, as a tqdm bar on a terminal or a line every 2 % in a
+    log (``fvdem.io.progress``); per-run lines go above it."""
+
+    def __init__(self, study: Study, started: float, log):
+        from .io.progress import progress_bar
+        self.study, self.log = study, log
+        self.total = sum(r.duration for r in study.runs)
+        self.bar = progress_bar(self.total, self._simulated(), f"study {study.name} (simulated s)")
+        if hasattr(self.bar, "step"):
+            self.bar.step = 2.0
+        self.is_tqdm = not hasattr(self.bar, "step")
+
+    def _simulated(self) -> float:
+        return sum(min(r.duration, _simulated_so_far(Path(r.folder), live=True)) for r in self.study.runs)
+
+    def update(self, runs_done: int) -> None:
+        now = self._simulated()
+        self.bar.set_postfix_str(f"{runs_done}/{len(self.study.runs)} runs done", refresh=False)
+        if now > self.bar.n:
+            self.bar.update(now - self.bar.n)
+
+    def message(self, line: str) -> None:
+        if self.is_tqdm:
+            self.bar.write(line, file=sys.stderr)
+        else:
+            self.log(line)
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print, poll: float = 30.0) -> dict:
     """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``).
-    SIGINT/SIGTERM (main thread) or ``request_stop(out)`` stop it with every running run checkpointed."""
-    from distributed import as_completed
+    SIGINT/SIGTERM (main thread) or ``request_stop(out)`` stop it with every running run checkpointed.
+    Progress: the run folders are read every ``poll`` seconds (``_StudyProgress``)."""
+    from distributed import wait
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.toml").write_text(Path(study.path).read_text())
@@ -470,22 +525,29 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         total = sum(r.duration for r in study.runs)
         results, done = [], 0.0
         write_index(out, study, description=description)
-        for future in as_completed(futures):
-            try:
-                result = future.result()
-            except Exception as exc:  # noqa: BLE001  (a bed failed or was stopped: its runs cannot start)
-                name = future.key.removeprefix("run-") if isinstance(future.key, str) else str(future.key)
-                run = next(r for r in study.runs if r.name == name)
-                stopped = isinstance(exc, StudyStopped) or (out / STOP_FILE).exists()
-                result = {"name": name, "family": run.family, "status": "stopped" if stopped else "failed",
-                          "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
-                          **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
-            results.append(result)
-            done += result.get("simulated_seconds", 0.0) if result["status"] != "failed" else 0.0
-            detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None else "t95 -")
-            log(progress_line(len(results), len(futures), result["name"], result["status"], detail, started,
-                              done, total, " simulated s"))
-            write_index(out, study, results, description)
+        bar = _StudyProgress(study, started, log)
+        pending = set(futures)
+        while pending:
+            finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
+            for future in finished:
+                try:
+                    result = future.result()
+                except Exception as exc:  # noqa: BLE001  (a bed failed or was stopped: its runs cannot start)
+                    name = future.key.removeprefix("run-") if isinstance(future.key, str) else str(future.key)
+                    run = next(r for r in study.runs if r.name == name)
+                    stopped = isinstance(exc, StudyStopped) or (out / STOP_FILE).exists()
+                    result = {"name": name, "family": run.family, "status": "stopped" if stopped else "failed",
+                              "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
+                              **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
+                results.append(result)
+                done += result.get("simulated_seconds", 0.0) if result["status"] != "failed" else 0.0
+                detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None
+                                                 else "t95 -")
+                bar.message(progress_line(len(results), len(futures), result["name"], result["status"], detail,
+                                          started, done, total, " simulated s"))
+                write_index(out, study, results, description)
+            bar.update(len(results))
+        bar.close()
     finally:
         close_client(client)
         for sig, handler in handlers.items():
