@@ -528,7 +528,10 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         bar = _StudyProgress(study, started, log)
         pending = set(futures)
         while pending:
-            finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
+            try:
+                finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
+            except TimeoutError:  # Dask's wait raises when nothing finished within the poll: show progress
+                finished = set()
             for future in finished:
                 try:
                     result = future.result()

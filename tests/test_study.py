@@ -401,3 +401,15 @@ def test_the_void_fraction_and_paper_settings_findings_and_little_change_above_2
     found = {f["finding"]: f for f in check_findings(rows)}
     assert found["fvdem's defaults do not change the mixing (AR-1 at the paper's own settings)"]["verdict"] == "open"
     assert "too noisy" in found["AR-1 void fractions more binary than AR-4 (Fig. 7)"]["why"]
+
+
+@pytest.mark.slow
+def test_the_progress_view_polls_while_runs_take_longer_than_its_interval(tmp_path):
+    """Runs longer than the poll interval: the study keeps waiting and updating its view (Dask's wait
+    raises when nothing finished within its timeout; that once ended the study with its runs cancelled)."""
+    from fvdem.study import run_study
+    lines = []
+    result = run_study(load_study(SMOKE, tmp_path / "study"), tmp_path / "study", workers=1, log=lines.append,
+                       poll=0.05)
+    assert [r["status"] for r in result["runs"]] == ["finished", "finished"]
+    assert sum(line.startswith(("[1/2]", "[2/2]")) for line in lines) == 2  # one line per finished run
