@@ -122,8 +122,10 @@ def test_adaptive_skin_stays_at_its_floor_at_rest_and_under_its_ceiling():
     floor = s.skin
     s.step(2000)
     assert s.skin == floor == SKIN_RANGE[0] * 2e-3 and s.rebuild_count == 1
+    s.rebuild()  # a rebuild asked for from outside keeps the skin
+    assert s.skin == floor
     for _ in range(8):
-        s.rebuild()  # lists that lasted no step: the skin doubles each time, up to its ceiling
+        s.rebuild(adapt=True)  # lists that lasted no step: the skin doubles each time, up to its ceiling
     assert s.skin == SKIN_RANGE[1] * 2e-3
 
 

@@ -185,9 +185,18 @@ def normal_damping(zeta, reduced_mass, k_n):
 
 
 @njit(cache=True, inline="always")
-def tangential_force(history, row, nx, ny, nz, vtx, vty, vtz, f_n, k_t, eta_t, mu, dt):
+def kernel_constants(params):
+    """The parameter vector as scalars, read once before a kernel's loops rather than once per contact
+    (numba cannot keep an array's values in registers across stores to other arrays, which might
+    alias it): ``(k_n, k_t, 1/k_t, eta_t/eta_n, mu, mu_r, dt, 1/dt)``."""
+    return (params[K_N], params[K_T], 1.0 / params[K_T], params[ETA_T_OVER_ETA_N], params[FRICTION],
+            params[ROLLING_FRICTION], params[DT], 1.0 / params[DT])
+
+
+@njit(cache=True, inline="always")
+def tangential_force(history, row, nx, ny, nz, vtx, vty, vtz, f_n, k_t, inv_k_t, eta_t, mu, dt):
     """Tangential spring-dashpot with Coulomb limit; updates ``history[row, :3]`` (the tangential
-    displacement, m) in place and returns the force (3 floats) [N]."""
+    displacement, m) in place and returns the force (3 floats) [N]. ``inv_k_t = 1 / k_t``."""
     hx = history[row, 0]
     hy = history[row, 1]
     hz = history[row, 2]
@@ -210,16 +219,16 @@ def tangential_force(history, row, nx, ny, nz, vtx, vty, vtz, f_n, k_t, eta_t, m
     fx = -k_t * hx - eta_t * vtx
     fy = -k_t * hy - eta_t * vty
     fz = -k_t * hz - eta_t * vtz
-    f_t = math.sqrt(fx * fx + fy * fy + fz * fz)
+    f_t2 = fx * fx + fy * fy + fz * fz
     f_max = mu * f_n
-    if f_t > f_max:
-        scale = f_max / f_t
+    if f_t2 > f_max * f_max:  # sliding (squares compared: no square root while the contact sticks)
+        scale = f_max / math.sqrt(f_t2)
         fx *= scale
         fy *= scale
         fz *= scale
-        hx = -(fx + eta_t * vtx) / k_t
-        hy = -(fy + eta_t * vty) / k_t
-        hz = -(fz + eta_t * vtz) / k_t
+        hx = -(fx + eta_t * vtx) * inv_k_t
+        hy = -(fy + eta_t * vty) * inv_k_t
+        hz = -(fz + eta_t * vtz) * inv_k_t
     history[row, 0] = hx
     history[row, 1] = hy
     history[row, 2] = hz
@@ -227,35 +236,35 @@ def tangential_force(history, row, nx, ny, nz, vtx, vty, vtz, f_n, k_t, eta_t, m
 
 
 @njit(cache=True, inline="always")
-def rolling_torque(nx, ny, nz, wx, wy, wz, f_n, mu_r, r_eff, inertia_eff, dt):
+def rolling_torque(nx, ny, nz, wx, wy, wz, f_n, mu_r, r_eff, inertia_eff, inv_dt):
     """Constant directional rolling-friction torque [N m] on the particle, from the relative
-    angular velocity ``w`` [rad/s] of particle minus partner."""
+    angular velocity ``w`` [rad/s] of particle minus partner: ``-min(mu_r R* F_n, I* |w_r| / dt)``
+    along ``w_r / |w_r|`` (one division: ``-min(mu_r R* F_n / |w_r|, I* / dt) w_r``)."""
     wn = wx * nx + wy * ny + wz * nz
     rx = wx - wn * nx
     ry = wy - wn * ny
     rz = wz - wn * nz
-    w_roll = math.sqrt(rx * rx + ry * ry + rz * rz)
-    if w_roll == 0.0 or mu_r == 0.0:
+    w_roll2 = rx * rx + ry * ry + rz * rz
+    if w_roll2 == 0.0 or mu_r == 0.0:
         return 0.0, 0.0, 0.0
-    magnitude = min(mu_r * r_eff * f_n, inertia_eff * w_roll / dt)
-    s = -magnitude / w_roll
+    s = -min(mu_r * r_eff * f_n / math.sqrt(w_roll2), inertia_eff * inv_dt)
     return s * rx, s * ry, s * rz
 
 
 @njit(cache=True, inline="always")
 def contact_force(history, row, delta, nx, ny, nz, vx, vy, vz, wx, wy, wz,
-                  eta_n, r_eff, inertia_eff, params):
+                  eta_n, r_eff, inertia_eff, law):
     """Total contact force on the particle [N] and its rolling torque [N m].
 
     ``history[row]`` holds the tangential displacement [m] and the contact flag (see module doc).
     ``delta`` overlap [m]; ``eta_n`` the dashpot coefficient [kg/s] (``normal_damping``);
     ``r_eff`` reduced radius [m]; ``inertia_eff`` reduced rolling inertia [kg m^2];
     ``n`` unit normal from partner to particle; ``v`` relative velocity of
-    the particle's contact point [m/s]; ``w`` relative angular velocity [rad/s]. Returns
-    ``(fx, fy, fz, tx, ty, tz, f_n)`` with ``f_n >= 0`` the normal force magnitude.
+    the particle's contact point [m/s]; ``w`` relative angular velocity [rad/s]; ``law`` the
+    constants of ``kernel_constants``. Returns ``(fx, fy, fz, tx, ty, tz, f_n)`` with ``f_n >= 0``
+    the normal force magnitude.
     """
-    k_n = params[K_N]
-    dt = params[DT]
+    k_n, k_t, inv_k_t, eta_t_ratio, mu, mu_r, dt, inv_dt = law
     v_n = vx * nx + vy * ny + vz * nz
     onset = 1.0
     if history[row, 3] == 0.0:  # first step of this contact
@@ -264,6 +273,6 @@ def contact_force(history, row, delta, nx, ny, nz, vx, vy, vz, wx, wy, wz,
             onset = 0.5 + min(delta / (-v_n * dt), 1.0)
     f_n = normal_force(delta, v_n, k_n, eta_n * onset)
     ftx, fty, ftz = tangential_force(history, row, nx, ny, nz, vx - v_n * nx, vy - v_n * ny, vz - v_n * nz,
-                                     f_n, params[K_T], eta_n * params[ETA_T_OVER_ETA_N], params[FRICTION], dt)
-    trx, try_, trz = rolling_torque(nx, ny, nz, wx, wy, wz, f_n, params[ROLLING_FRICTION], r_eff, inertia_eff, dt)
+                                     f_n, k_t, inv_k_t, eta_n * eta_t_ratio, mu, dt)
+    trx, try_, trz = rolling_torque(nx, ny, nz, wx, wy, wz, f_n, mu_r, r_eff, inertia_eff, inv_dt)
     return f_n * nx + ftx, f_n * ny + fty, f_n * nz + ftz, trx, try_, trz, f_n

@@ -20,7 +20,7 @@ import math
 
 from numba import njit, prange
 
-from .contact_law import K_N, ZETA_N, ZETA_WALL, contact_force, normal_damping
+from .contact_law import ZETA_N, ZETA_WALL, contact_force, kernel_constants, normal_damping
 from .geometry import minimum_image, segment_parameters
 
 # fast-math without 'nnan'/'ninf': FMA contraction, reciprocals, reassociation; NaN and Inf still
@@ -36,8 +36,9 @@ def _cross(ax, ay, az, bx, by, bz):
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
                 row_start, neighbours, history, partner_slot, owner_sum, partner_result, row_max_overlap,
-                row_contacts, box_length, periodic, params, spheres_only, uniform):
-    """Contact force and torques of every listed pair.
+                row_contacts, box_length, periodic, params, uniform):
+    """Contact force and torques of every listed pair (any shapes; ``sphere_pair_forces`` is the same for
+    spheres only, without the segment geometry).
 
     Row i's pairs are the slots ``row_start[i] .. row_start[i+1]`` of the CSR list ``neighbours``;
     ``history`` (4 columns, see ``contact_law``) is indexed by slot; ``owner_sum`` (N, 6) gets each row's ``[force, torque]`` sum;
@@ -48,8 +49,12 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
     ``row_contacts[i]`` the number of touching pairs in row i.
     """
     n = position.shape[0]
+    law = kernel_constants(params)
+    same = uniform[0] >= 0.0
+    lx, ly, lz = box_length[0], box_length[1], box_length[2]
+    qx, qy, qz = periodic[0], periodic[1], periodic[2]
     for i in prange(n):
-        max_overlap = 0.0
+        max_overlap = 0.0  # identical particles: the largest overlap [m], divided by the diameter at the end
         touching = 0
         sfx = 0.0
         sfy = 0.0
@@ -57,24 +62,25 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
         stx = 0.0
         sty = 0.0
         stz = 0.0
+        # row i's own values, read once (the stores below might alias them for the compiler)
+        px, py, pz = position[i, 0], position[i, 1], position[i, 2]
+        ri, hi = radius[i], half_length[i]
+        vix, viy, viz = velocity[i, 0], velocity[i, 1], velocity[i, 2]
         ai0, ai1, ai2 = axis[i, 0], axis[i, 1], axis[i, 2]
+        wi0, wi1, wi2 = angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2]
         for slot in range(row_start[i], row_start[i + 1]):
             j = neighbours[slot]
-            rx = minimum_image(position[i, 0] - position[j, 0], box_length[0], periodic[0])
-            ry = minimum_image(position[i, 1] - position[j, 1], box_length[1], periodic[1])
-            rz = minimum_image(position[i, 2] - position[j, 2], box_length[2], periodic[2])
-            if spheres_only:
-                s = 0.0
-                t = 0.0
-                dx, dy, dz = rx, ry, rz
-            else:
-                s, t = segment_parameters(rx, ry, rz, ai0, ai1, ai2, half_length[i],
-                                          axis[j, 0], axis[j, 1], axis[j, 2], half_length[j])
-                dx = rx + s * ai0 - t * axis[j, 0]
-                dy = ry + s * ai1 - t * axis[j, 1]
-                dz = rz + s * ai2 - t * axis[j, 2]
+            rx = minimum_image(px - position[j, 0], lx, qx)
+            ry = minimum_image(py - position[j, 1], ly, qy)
+            rz = minimum_image(pz - position[j, 2], lz, qz)
+            aj0, aj1, aj2 = axis[j, 0], axis[j, 1], axis[j, 2]
+            s, t = segment_parameters(rx, ry, rz, ai0, ai1, ai2, hi, aj0, aj1, aj2, half_length[j])
+            dx = rx + s * ai0 - t * aj0
+            dy = ry + s * ai1 - t * aj1
+            dz = rz + s * ai2 - t * aj2
             dist2 = dx * dx + dy * dy + dz * dz
-            radius_sum = radius[i] + radius[j]
+            rj = radius[j]
+            radius_sum = ri + rj
             if dist2 >= radius_sum * radius_sum:
                 # not touching: forget the history and zero the result, once, when the contact ends
                 if history[slot, 3] != 0.0:
@@ -86,33 +92,33 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
                 continue
             dist = math.sqrt(dist2)
             if dist > 1e-14 * radius_sum:
-                nx, ny, nz = dx / dist, dy / dist, dz / dist
+                inv = 1.0 / dist
+                nx, ny, nz = dx * inv, dy * inv, dz * inv
             else:  # coincident axes: any direction is a normal
                 nx, ny, nz = 0.0, 0.0, 1.0
             overlap = radius_sum - dist
             # lever arms from each centre to the contact point (middle of the overlap)
-            li = radius[i] - 0.5 * overlap
-            lj = radius[j] - 0.5 * overlap
+            li = ri - 0.5 * overlap
+            lj = rj - 0.5 * overlap
             lix, liy, liz = s * ai0 - li * nx, s * ai1 - li * ny, s * ai2 - li * nz
-            ljx, ljy, ljz = t * axis[j, 0] + lj * nx, t * axis[j, 1] + lj * ny, t * axis[j, 2] + lj * nz
-            wi0, wi1, wi2 = angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2]
+            ljx, ljy, ljz = t * aj0 + lj * nx, t * aj1 + lj * ny, t * aj2 + lj * nz
             wj0, wj1, wj2 = angular_velocity[j, 0], angular_velocity[j, 1], angular_velocity[j, 2]
             ci = _cross(wi0, wi1, wi2, lix, liy, liz)
             cj = _cross(wj0, wj1, wj2, ljx, ljy, ljz)
-            vx = velocity[i, 0] + ci[0] - velocity[j, 0] - cj[0]
-            vy = velocity[i, 1] + ci[1] - velocity[j, 1] - cj[1]
-            vz = velocity[i, 2] + ci[2] - velocity[j, 2] - cj[2]
-            if uniform[0] >= 0.0:
+            vx = vix + ci[0] - velocity[j, 0] - cj[0]
+            vy = viy + ci[1] - velocity[j, 1] - cj[1]
+            vz = viz + ci[2] - velocity[j, 2] - cj[2]
+            if same:
                 eta_n, r_eff, inertia_eff = uniform[0], uniform[1], uniform[2]
             else:
-                eta_n = normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), params[K_N])
-                r_eff = radius[i] * radius[j] / radius_sum
+                eta_n = normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[0])
+                r_eff = ri * rj / radius_sum
                 ii = min(inertia[i, 0], inertia[i, 1])
                 ij = min(inertia[j, 0], inertia[j, 1])
                 inertia_eff = ii * ij / (ii + ij)
             fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
                 history, slot, overlap, nx, ny, nz, vx, vy, vz,
-                wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, params)
+                wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)
             ti = _cross(lix, liy, liz, fx, fy, fz)
             tj = _cross(ljx, ljy, ljz, -fx, -fy, -fz)
             sfx += fx
@@ -129,7 +135,7 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             partner_result[dest, 4] = tj[1] - tr_y
             partner_result[dest, 5] = tj[2] - trz
             touching += 1
-            ratio = overlap / (2.0 * min(radius[i], radius[j]))
+            ratio = overlap if same else overlap / (2.0 * min(ri, rj))
             if ratio > max_overlap:
                 max_overlap = ratio
         owner_sum[i, 0] = sfx
@@ -138,7 +144,104 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
         owner_sum[i, 3] = stx
         owner_sum[i, 4] = sty
         owner_sum[i, 5] = stz
-        row_max_overlap[i] = max_overlap
+        row_max_overlap[i] = max_overlap / (2.0 * ri) if same else max_overlap
+        row_contacts[i] = touching
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def sphere_pair_forces(position, velocity, angular_velocity, radius, mass, inertia, row_start, neighbours, history,
+                       partner_slot, owner_sum, partner_result, row_max_overlap, row_contacts, box_length, periodic,
+                       params, uniform):
+    """``pair_forces`` for spheres: the same contacts and results (to round-off: tested against it),
+    with the contact point on the line of centres, so no segment geometry and the lever arms
+    ``-l_i n`` and ``l_j n`` folded into the velocity and the torques. 15-25 % faster on the settled
+    32,500-sphere bed (docs/benchmarks.md)."""
+    n = position.shape[0]
+    law = kernel_constants(params)
+    same = uniform[0] >= 0.0
+    lx, ly, lz = box_length[0], box_length[1], box_length[2]
+    qx, qy, qz = periodic[0], periodic[1], periodic[2]
+    for i in prange(n):
+        max_overlap = 0.0  # identical particles: the largest overlap [m], divided by the diameter at the end
+        touching = 0
+        sfx = 0.0
+        sfy = 0.0
+        sfz = 0.0
+        stx = 0.0
+        sty = 0.0
+        stz = 0.0
+        px, py, pz = position[i, 0], position[i, 1], position[i, 2]
+        ri = radius[i]
+        vix, viy, viz = velocity[i, 0], velocity[i, 1], velocity[i, 2]
+        wi0, wi1, wi2 = angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2]
+        for slot in range(row_start[i], row_start[i + 1]):
+            j = neighbours[slot]
+            dx = minimum_image(px - position[j, 0], lx, qx)
+            dy = minimum_image(py - position[j, 1], ly, qy)
+            dz = minimum_image(pz - position[j, 2], lz, qz)
+            dist2 = dx * dx + dy * dy + dz * dz
+            rj = radius[j]
+            radius_sum = ri + rj
+            if dist2 >= radius_sum * radius_sum:
+                if history[slot, 3] != 0.0:  # the contact ended: forget it, once
+                    for c in range(4):
+                        history[slot, c] = 0.0
+                    dest = partner_slot[slot]
+                    for c in range(6):
+                        partner_result[dest, c] = 0.0
+                continue
+            dist = math.sqrt(dist2)
+            if dist > 1e-14 * radius_sum:
+                inv = 1.0 / dist
+                nx, ny, nz = dx * inv, dy * inv, dz * inv
+            else:  # coincident centres: any direction is a normal
+                nx, ny, nz = 0.0, 0.0, 1.0
+            overlap = radius_sum - dist
+            li = ri - 0.5 * overlap
+            lj = rj - 0.5 * overlap
+            wj0, wj1, wj2 = angular_velocity[j, 0], angular_velocity[j, 1], angular_velocity[j, 2]
+            # contact-point velocity v_i + w_i x (-l_i n) - v_j - w_j x (l_j n) = v_i - v_j - (l_i w_i + l_j w_j) x n
+            sx = li * wi0 + lj * wj0
+            sy = li * wi1 + lj * wj1
+            sz = li * wi2 + lj * wj2
+            vx = vix - velocity[j, 0] - (sy * nz - sz * ny)
+            vy = viy - velocity[j, 1] - (sz * nx - sx * nz)
+            vz = viz - velocity[j, 2] - (sx * ny - sy * nx)
+            if same:
+                eta_n, r_eff, inertia_eff = uniform[0], uniform[1], uniform[2]
+            else:
+                eta_n = normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[0])
+                r_eff = ri * rj / radius_sum
+                inertia_eff = inertia[i, 0] * inertia[j, 0] / (inertia[i, 0] + inertia[j, 0])
+            fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
+                history, slot, overlap, nx, ny, nz, vx, vy, vz,
+                wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)
+            # torques: (-l_i n) x F on i, (l_j n) x (-F) on j, both -l (n x F)
+            cx, cy, cz = _cross(nx, ny, nz, fx, fy, fz)
+            sfx += fx
+            sfy += fy
+            sfz += fz
+            stx += trx - li * cx
+            sty += tr_y - li * cy
+            stz += trz - li * cz
+            dest = partner_slot[slot]
+            partner_result[dest, 0] = -fx
+            partner_result[dest, 1] = -fy
+            partner_result[dest, 2] = -fz
+            partner_result[dest, 3] = -lj * cx - trx
+            partner_result[dest, 4] = -lj * cy - tr_y
+            partner_result[dest, 5] = -lj * cz - trz
+            touching += 1
+            ratio = overlap if same else overlap / (2.0 * min(ri, rj))
+            if ratio > max_overlap:
+                max_overlap = ratio
+        owner_sum[i, 0] = sfx
+        owner_sum[i, 1] = sfy
+        owner_sum[i, 2] = sfz
+        owner_sum[i, 3] = stx
+        owner_sum[i, 4] = sty
+        owner_sum[i, 5] = stz
+        row_max_overlap[i] = max_overlap / (2.0 * ri) if same else max_overlap
         row_contacts[i] = touching
 
 
@@ -153,6 +256,7 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
     bit ``face*2 + end`` of ``wall_mask[i]`` is set while that slot holds a contact, so particles
     away from walls cost one integer read instead of twelve history rows."""
     n = position.shape[0]
+    law = kernel_constants(params)
     for i in prange(n):
         fx = owner_sum[i, 0]
         fy = owner_sum[i, 1]
@@ -219,7 +323,7 @@ def gather_forces(position, velocity, angular_velocity, axis, radius, half_lengt
                 wfx, wfy, wfz, trx, tr_y, trz, f_n = contact_force(
                     wall_history, slot, overlap, nx, ny, nz, vx, vy, vz,
                     angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2],
-                    normal_damping(params[ZETA_WALL], mass[i], params[K_N]), r, imin, params)
+                    normal_damping(params[ZETA_WALL], mass[i], law[0]), r, imin, law)
                 fx += wfx
                 fy += wfy
                 fz += wfz

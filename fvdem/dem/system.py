@@ -21,7 +21,7 @@ import numpy as np
 from ..timing import Timings
 
 from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
-from .forces import gather_forces, pair_forces
+from .forces import gather_forces, pair_forces, sphere_pair_forces
 from .integrate import kick, kick_drift
 from .neighbours import (build_half_list, build_partner_slots, cell_indices, cell_starts, compact_rows,
                          row_offsets, transfer_history, wrap_periodic)
@@ -188,7 +188,7 @@ class DEMSystem:
                        p.drag_impulse, self.implicit_drag)
             t1 = perf_counter()
             if self.displacement.max() > 0.5 * self.skin:
-                self.rebuild()
+                self.rebuild(adapt=True)
                 p = self.particles
             t2 = perf_counter()
             self.compute_forces()
@@ -206,10 +206,16 @@ class DEMSystem:
 
     def compute_forces(self) -> None:
         p = self.particles
-        pair_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
-                    p.half_length, p.mass, p.inertia, self.row_start, self.neighbours, self.history, self._partner_slot,
-                    self._owner_sum, self._partner_result, self._row_max_overlap, self._row_contacts, self._box_len, self._periodic, self.params,
-                    not self.track_orientation, self._uniform)
+        if self.track_orientation:
+            pair_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius, p.half_length, p.mass,
+                        p.inertia, self.row_start, self.neighbours, self.history, self._partner_slot,
+                        self._owner_sum, self._partner_result, self._row_max_overlap, self._row_contacts,
+                        self._box_len, self._periodic, self.params, self._uniform)
+        else:  # spheres only
+            sphere_pair_forces(p.position, p.velocity, p.angular_velocity, p.radius, p.mass, p.inertia,
+                               self.row_start, self.neighbours, self.history, self._partner_slot, self._owner_sum,
+                               self._partner_result, self._row_max_overlap, self._row_contacts, self._box_len,
+                               self._periodic, self.params, self._uniform)
         gather_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
                       p.half_length, p.mass, p.inertia, self._owner_sum, self._partner_result,
                       self._partner_start, self._walls,
@@ -225,12 +231,13 @@ class DEMSystem:
             np.ones(3, np.int64)
         self._cell_size = self._box_len / self._n_cells
 
-    def rebuild(self) -> None:
+    def rebuild(self, adapt: bool = False) -> None:
         """Sort particles by cell, rebuild the half list, carry contact histories over. With the
-        adaptive skin, the new list's skin follows from how long the last one lasted."""
+        adaptive skin and ``adapt`` (a rebuild the displacements asked for, from ``step``), the new
+        list's skin follows from how long the last one lasted; a rebuild asked for from outside keeps it."""
         p = self.particles
         n = p.count
-        if self.adaptive_skin and self.rebuild_count > 0:
+        if adapt and self.adaptive_skin and self.rebuild_count > 0:
             skin = adapted_skin(self.skin, self.step_count - self._last_rebuild_step, *self._skin_bounds)
             if skin != self.skin:
                 self.skin = skin
