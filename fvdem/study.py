@@ -346,9 +346,31 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
     except ImportError:
         raise CaseError([f"cluster.kind = {kind!r}: needs dask-jobqueue (pip install dask-jobqueue)"]) from None
     cluster_class = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster"}[kind]
-    jobs = getattr(dask_jobqueue, cluster_class)(**options)
+    try:
+        jobs = getattr(dask_jobqueue, cluster_class)(**jobqueue_options(kind, options, threads))
+    except (TypeError, ValueError) as exc:  # an option dask-jobqueue does not know
+        raise CaseError([f"cluster: {exc} (the [cluster] table's keys are dask_jobqueue.{cluster_class}'s options)"]) from None
     jobs.scale(jobs=count)
     return Client(jobs), f"{cluster_class}({count} jobs)"
+
+
+def jobqueue_options(kind: str, options: dict, threads: int) -> dict:
+    """dask-jobqueue's options for a study's ``[cluster]`` table: one Dask worker process with one task
+    slot per job (``cores = 1``, ``processes = 1``: one run at a time, its numba threads its own), and
+    the job booking the run's ``threads`` CPUs where the scheduler has a separate option for it (SLURM
+    ``job_cpu``, LSF ``ncpus``; on PBS and SGE book them with ``resource_spec``). ``memory`` is
+    required; any other key is passed on and refused by dask-jobqueue if it does not know it."""
+    options = dict(options)
+    if "memory" not in options:
+        raise CaseError([f"cluster.memory: missing; a {kind} job needs the memory it books, e.g. memory = \"8GB\" "
+                         "(one run of the paper's bed needs about 1 GB)"])
+    options.setdefault("cores", 1)
+    options.setdefault("processes", 1)
+    if kind == "slurm":
+        options.setdefault("job_cpu", threads)
+    elif kind == "lsf":
+        options.setdefault("ncpus", threads)
+    return options
 
 
 try:

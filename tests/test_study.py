@@ -1,6 +1,7 @@
 """fvdem study (issue 17): a study file expands into checked runs, runs them as Dask tasks with the
 settled bed prepared once, skips finished runs on a second call, and reports a failed run's cause."""
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -413,3 +414,42 @@ def test_the_progress_view_polls_while_runs_take_longer_than_its_interval(tmp_pa
                        poll=0.05)
     assert [r["status"] for r in result["runs"]] == ["finished", "finished"]
     assert sum(line.startswith(("[1/2]", "[2/2]")) for line in lines) == 2  # one line per finished run
+
+
+def test_a_slurm_cluster_table_submits_one_job_per_worker_with_the_runs_threads_booked(tmp_path, monkeypatch):
+    """The [cluster] path without a cluster: fake sbatch/squeue/scancel on PATH record what dask-jobqueue
+    submits. Each job books the run's numba threads as CPUs (job_cpu) and runs one Dask worker with one
+    task slot; the table's options reach the job script; a wrong option or a missing memory is refused
+    by key."""
+    pytest.importorskip("dask_jobqueue")
+    import time
+    from fvdem.study import close_client, make_client
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    log = tmp_path / "submitted"
+    (bin_dir / "sbatch").write_text(f'#!/bin/sh\ncat "$@" >> {log}\necho "----" >> {log}\necho "Submitted batch job 4242"\n')
+    (bin_dir / "scancel").write_text(f'#!/bin/sh\necho "scancel $@" >> {tmp_path / "cancelled"}\n')
+    (bin_dir / "squeue").write_text("#!/bin/sh\nexit 0\n")
+    for tool in bin_dir.iterdir():
+        tool.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{bin_dir}:{os.environ['PATH']}")
+    client, description = make_client({"kind": "slurm", "workers": 2, "memory": "4GB", "walltime": "02:00:00",
+                                        "queue": "compute"}, None, None, threads=4)
+    try:
+        deadline = time.time() + 60
+        while (not log.exists() or log.read_text().count("----") < 2) and time.time() < deadline:
+            time.sleep(0.2)
+        assert description == "SLURMCluster(2 jobs)"
+        scripts = log.read_text().split("----")[:2]
+        for script in scripts:
+            assert "#SBATCH --cpus-per-task=4" in script and "#SBATCH -p compute" in script
+            assert "#SBATCH -t 02:00:00" in script and "--nthreads 1" in script
+            assert "distributed.cli.dask_worker" in script or "dask worker" in script or "dask-worker" in script
+    finally:
+        close_client(client)
+    with pytest.raises(CaseError) as err:
+        make_client({"kind": "slurm", "workers": 1}, None, None, threads=1)
+    assert "cluster.memory" in str(err.value)
+    with pytest.raises(CaseError) as err:
+        make_client({"kind": "slurm", "memory": "1GB", "partitionz": "x"}, None, None, threads=1)
+    assert "partitionz" in str(err.value)
