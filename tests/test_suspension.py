@@ -168,3 +168,17 @@ def test_short_periodic_suspension_balances_momentum_and_settles():
     assert summary["slip_reynolds_standard_error"] < 0.05 * summary["slip_reynolds"]
     # hindered: slower than the single particle's terminal velocity under the same closure
     assert summary["slip_reynolds"] < tool.terminal_reynolds(_scene())
+
+
+def test_the_sweeps_output_folder_is_made_before_its_runs(tmp_path, monkeypatch):
+    """A missing --out folder used to fail when the chart was written, after the whole sweep."""
+    import fvdem.study
+    seen = {}
+
+    def no_runs(*args, **kwargs):
+        seen["folder"] = (tmp_path / "new" / "sweep").is_dir()
+        raise SystemExit(0)
+    monkeypatch.setattr(fvdem.study, "map_tasks", no_runs)
+    with pytest.raises(SystemExit):
+        tool.main(["--quick", "--out", str(tmp_path / "new" / "sweep")])
+    assert seen["folder"]

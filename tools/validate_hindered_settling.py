@@ -120,6 +120,7 @@ def main(argv=None):
         args.ga_e = 1296.0
     if args.quick:
         args.fractions, args.duration = [0.1, 0.29, 0.48], 6.0
+    Path(args.out).mkdir(parents=True, exist_ok=True)  # before the runs: a missing folder lost a sweep's result
     wall0 = time.perf_counter()
     tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration, drag=args.drag)
               for phi in args.fractions]
