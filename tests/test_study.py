@@ -75,6 +75,25 @@ def test_the_smoke_study_runs_on_a_local_cluster_and_a_second_call_starts_nothin
     assert [r["status"] for r in json.loads(second.stdout.strip().splitlines()[-1])["runs"]] == ["skipped", "skipped"]
 
 
+def _one_run_study(tmp_path, name, checkpoint_interval):
+    """A study of one 0.3 s run of the 150-sphere demo bed at 2 Umf (run small_u_over_umf2)."""
+    study = tmp_path / f"{name}.toml"
+    study.write_text(f'''name = "{name}"
+duration = 0.3
+[settings]
+"output.vtk" = false
+"output.checkpoint_interval" = {checkpoint_interval}
+"output.timeseries_interval" = 0.005
+[families.small]
+case = "{ROOT / 'cases' / 'demo.toml'}"
+[families.small.set]
+"particles.count" = 150
+[axes]
+"gas.u_over_umf" = [2.0]
+''')
+    return study
+
+
 @pytest.mark.slow
 def test_a_worker_killed_mid_run_is_replaced_and_the_run_resumes_from_its_checkpoint(tmp_path):
     """SIGKILL the worker process while its run is past a checkpoint: Dask gives the task to a new
@@ -84,20 +103,7 @@ def test_a_worker_killed_mid_run_is_replaced_and_the_run_resumes_from_its_checkp
 
     import numpy as np
     import psutil
-    study = tmp_path / "kill.toml"
-    study.write_text(f'''name = "kill"
-duration = 0.3
-[settings]
-"output.vtk" = false
-"output.checkpoint_interval" = 0.02
-"output.timeseries_interval" = 0.005
-[families.small]
-case = "{ROOT / 'cases' / 'demo.toml'}"
-[families.small.set]
-"particles.count" = 150
-[axes]
-"gas.u_over_umf" = [2.0]
-''')
+    study = _one_run_study(tmp_path, "kill", checkpoint_interval=0.02)
     out = tmp_path / "study"
     command = [sys.executable, "-m", "fvdem", "study", str(study), "--out", str(out), "--workers", "1", "--json"]
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -323,20 +329,7 @@ def test_ctrl_c_stops_the_study_with_its_runs_checkpointed_and_the_same_command_
     and the same command resumes it to the end; `--stop` asks the same from another process."""
     import signal
     import time
-    study = tmp_path / "stop.toml"
-    study.write_text(f'''name = "stop"
-duration = 0.3
-[settings]
-"output.vtk" = false
-"output.checkpoint_interval" = 0.1
-"output.timeseries_interval" = 0.005
-[families.small]
-case = "{ROOT / 'cases' / 'demo.toml'}"
-[families.small.set]
-"particles.count" = 150
-[axes]
-"gas.u_over_umf" = [2.0]
-''')
+    study = _one_run_study(tmp_path, "stop", checkpoint_interval=0.1)
     out = tmp_path / "study"
     command = [sys.executable, "-m", "fvdem", "study", str(study), "--out", str(out), "--workers", "1", "--json"]
     # its own process group, signalled as a whole: what Ctrl-C on a terminal does (the workers get it too)

@@ -33,6 +33,39 @@ def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
+@njit(cache=True, inline="always")
+def _forget(history, slot, partner_slot, partner_result):
+    """A listed pair that does not touch: clear its history and its partner result, once, when the
+    contact ends (the flag in history column 3 says it existed)."""
+    if history[slot, 3] != 0.0:
+        for c in range(4):
+            history[slot, c] = 0.0
+        dest = partner_slot[slot]
+        for c in range(6):
+            partner_result[dest, c] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _store_partner(partner_result, dest, fx, fy, fz, tx, ty, tz):
+    """The partner's side of a pair: ``-F`` and the torque on the partner, in its own block's slot."""
+    partner_result[dest, 0] = -fx
+    partner_result[dest, 1] = -fy
+    partner_result[dest, 2] = -fz
+    partner_result[dest, 3] = tx
+    partner_result[dest, 4] = ty
+    partner_result[dest, 5] = tz
+
+
+@njit(cache=True, inline="always")
+def _store_row(owner_sum, i, fx, fy, fz, tx, ty, tz):
+    owner_sum[i, 0] = fx
+    owner_sum[i, 1] = fy
+    owner_sum[i, 2] = fz
+    owner_sum[i, 3] = tx
+    owner_sum[i, 4] = ty
+    owner_sum[i, 5] = tz
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
                 row_start, neighbours, history, partner_slot, owner_sum, partner_result, row_max_overlap,
@@ -82,13 +115,7 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             rj = radius[j]
             radius_sum = ri + rj
             if dist2 >= radius_sum * radius_sum:
-                # not touching: forget the history and zero the result, once, when the contact ends
-                if history[slot, 3] != 0.0:
-                    for c in range(4):
-                        history[slot, c] = 0.0
-                    dest = partner_slot[slot]
-                    for c in range(6):
-                        partner_result[dest, c] = 0.0
+                _forget(history, slot, partner_slot, partner_result)
                 continue
             dist = math.sqrt(dist2)
             if dist > 1e-14 * radius_sum:
@@ -127,23 +154,12 @@ def pair_forces(position, velocity, angular_velocity, axis, radius, half_length,
             stx += ti[0] + trx
             sty += ti[1] + tr_y
             stz += ti[2] + trz
-            dest = partner_slot[slot]
-            partner_result[dest, 0] = -fx
-            partner_result[dest, 1] = -fy
-            partner_result[dest, 2] = -fz
-            partner_result[dest, 3] = tj[0] - trx
-            partner_result[dest, 4] = tj[1] - tr_y
-            partner_result[dest, 5] = tj[2] - trz
+            _store_partner(partner_result, partner_slot[slot], fx, fy, fz, tj[0] - trx, tj[1] - tr_y, tj[2] - trz)
             touching += 1
             ratio = overlap if same else overlap / (2.0 * min(ri, rj))
             if ratio > max_overlap:
                 max_overlap = ratio
-        owner_sum[i, 0] = sfx
-        owner_sum[i, 1] = sfy
-        owner_sum[i, 2] = sfz
-        owner_sum[i, 3] = stx
-        owner_sum[i, 4] = sty
-        owner_sum[i, 5] = stz
+        _store_row(owner_sum, i, sfx, sfy, sfz, stx, sty, stz)
         row_max_overlap[i] = max_overlap / (2.0 * ri) if same else max_overlap
         row_contacts[i] = touching
 
@@ -183,12 +199,7 @@ def sphere_pair_forces(position, velocity, angular_velocity, radius, mass, inert
             rj = radius[j]
             radius_sum = ri + rj
             if dist2 >= radius_sum * radius_sum:
-                if history[slot, 3] != 0.0:  # the contact ended: forget it, once
-                    for c in range(4):
-                        history[slot, c] = 0.0
-                    dest = partner_slot[slot]
-                    for c in range(6):
-                        partner_result[dest, c] = 0.0
+                _forget(history, slot, partner_slot, partner_result)
                 continue
             dist = math.sqrt(dist2)
             if dist > 1e-14 * radius_sum:
@@ -224,23 +235,13 @@ def sphere_pair_forces(position, velocity, angular_velocity, radius, mass, inert
             stx += trx - li * cx
             sty += tr_y - li * cy
             stz += trz - li * cz
-            dest = partner_slot[slot]
-            partner_result[dest, 0] = -fx
-            partner_result[dest, 1] = -fy
-            partner_result[dest, 2] = -fz
-            partner_result[dest, 3] = -lj * cx - trx
-            partner_result[dest, 4] = -lj * cy - tr_y
-            partner_result[dest, 5] = -lj * cz - trz
+            _store_partner(partner_result, partner_slot[slot], fx, fy, fz, -lj * cx - trx, -lj * cy - tr_y,
+                           -lj * cz - trz)
             touching += 1
             ratio = overlap if same else overlap / (2.0 * min(ri, rj))
             if ratio > max_overlap:
                 max_overlap = ratio
-        owner_sum[i, 0] = sfx
-        owner_sum[i, 1] = sfy
-        owner_sum[i, 2] = sfz
-        owner_sum[i, 3] = stx
-        owner_sum[i, 4] = sty
-        owner_sum[i, 5] = stz
+        _store_row(owner_sum, i, sfx, sfy, sfz, stx, sty, stz)
         row_max_overlap[i] = max_overlap / (2.0 * ri) if same else max_overlap
         row_contacts[i] = touching
 
