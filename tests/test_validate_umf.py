@@ -1,4 +1,5 @@
 """tools/validate_umf.py: the Umf fit on synthetic defluidization curves (the ramp itself is a tool run)."""
+import json
 import sys
 from pathlib import Path
 
@@ -43,3 +44,34 @@ def test_fixed_branch_coefficients_are_non_negative():
     drop = np.array([1000.0, 1000.0, 700.0, 600.0, 480.0, 330.0])  # concave: an unconstrained b < 0
     _, umf, (fa, fb) = tool.fit_umf(velocity, drop, 1000.0, 1.5)
     assert fa >= 0 and fb >= 0 and np.isfinite(umf)
+
+
+def test_a_killed_ramp_resumes_from_its_last_hold_bit_for_bit(tmp_path, monkeypatch):
+    """A ramp checkpoints at the end of its start and of every hold. Killed after a hold's checkpoint
+    but before its point was recorded (the worst moment), `resume` completes that hold from the time
+    series and the restored bed, then continues: the curve and the fitted Umf are the uninterrupted
+    ramp's, bit for bit."""
+    spec = {"shape": "sphere", "closures": "mp", "particles": 500, "threads": 1, "width": 0.06,
+            "settings": "default", "drag": "paper", "hold": 0.06, "start": 0.15, "quick": True,
+            "out": str(tmp_path / "straight")}
+    straight = tool.ramp(spec)
+    original, calls = tool._hold_entry, []
+
+    def killed_at_the_third_hold(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return original(*args, **kwargs)
+    monkeypatch.setattr(tool, "_hold_entry", killed_at_the_third_hold)
+    killed = dict(spec, out=str(tmp_path / "killed"))
+    with pytest.raises(KeyboardInterrupt):
+        tool.ramp(killed)
+    monkeypatch.setattr(tool, "_hold_entry", original)
+    progress = json.loads((tmp_path / "killed" / "ramp_sphere" / "ramp.json").read_text())
+    assert len(progress["curve"]) == 2
+    resumed = tool.ramp(dict(killed, resume=True))
+    assert resumed["curve"] == straight["curve"] and len(resumed["curve"]) == 5
+    assert resumed["umf_simulated"] == straight["umf_simulated"]
+    # without --resume an existing ramp folder is started again, not mixed into
+    again = tool.ramp(dict(killed))
+    assert again["curve"] == straight["curve"]

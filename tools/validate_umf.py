@@ -24,6 +24,10 @@ Several shapes or drag laws give one ramp each, run as tasks on fvdem's sweep en
 clients of ``fvdem study``: ``--workers`` for a LocalCluster, ``--scheduler`` for a running one); each
 ramp stays sequential. The last line is then ``{"ramps": [...], "plot": ..., "wall_seconds": ...}``.
 
+Each ramp runs in its own run folder, ``OUT/ramp_<tag>`` (time series, a checkpoint at the end of the
+start and of every hold, the holds done in ``ramp.json``); ``--resume`` continues killed ramps from
+their last finished hold, bit for bit (a ramp of the paper's AR-4 bed takes hours).
+
 Prints progress, writes ``umf_<shape>[_<closures>].png`` (pressure drop over weight against U)
 and, as the last line, one JSON object.
 """
@@ -112,16 +116,6 @@ def branch_crossing(a, b, level):
     return float(level / a if abs(b) < 1e-12 else (-a + np.sqrt(a * a + 4 * b * level)) / (2 * b))
 
 
-def mean_pressure_drop(sim, hold, sample=5e-4):
-    values = []
-    steps = int(round(hold / sample))
-    for k in range(steps):
-        sim.run(sample)
-        if k >= steps // 2:
-            values.append(sim.gas.diagnostics()["bed_pressure_drop"])
-    return float(np.mean(values)), float(np.std(values))
-
-
 def fit_umf(velocity, drop, weight, umf_experiment):
     velocity, drop = np.asarray(velocity), np.asarray(drop)
     fluidized = velocity >= 1.3 * umf_experiment
@@ -144,45 +138,94 @@ def fit_umf(velocity, drop, weight, umf_experiment):
     return plateau, branch_crossing(a, b, plateau), (float(a), float(b))
 
 
+SAMPLE = 5e-4  # s between pressure-drop samples of a hold (the ramp's time series interval)
+
+
+def hold_statistics(folder, end_time, hold):
+    """Mean and standard deviation of the bed pressure drop [Pa] over the second half of the hold that
+    ended at ``end_time`` [s], from the ramp's time series (samples every ``SAMPLE`` s)."""
+    from fvdem.analysis.plots import read_timeseries
+    series = read_timeseries(folder)
+    t = series["time"]
+    steps = int(round(hold / SAMPLE))
+    first = end_time - hold + (steps // 2 + 1) * SAMPLE
+    values = series["bed_pressure_drop"][(t >= first - 0.25 * SAMPLE) & (t <= end_time + 0.25 * SAMPLE)]
+    return float(np.mean(values)), float(np.std(values))
+
+
+def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
+    """One point of the curve: the hold's pressure drop and, for the bed as it is at the end of the
+    hold, the uniform bed of its core packing and equivalent height under the closure at this velocity
+    (the CFD-DEM's own error, hold by hold)."""
+    drop, spread = hold_statistics(folder, sim.time, hold)
+    hold_packing = packed_state(sim)
+    solid_height = solid_volume / area
+    uniform = uniform_bed_pressure_gradient(sim.bridge.model, 1.0 - hold_packing["solids_fraction"], u,
+                                            hold_packing["axes"]) * solid_height / hold_packing["solids_fraction"]
+    return {"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
+            "over_weight": drop / weight, "packed_solids_fraction": hold_packing["solids_fraction"],
+            "closure_uniform_bed_over_weight": uniform / weight, "end_time": sim.time}
+
+
 def ramp(spec, threads=None):
     """One defluidization ramp (sequential by nature): ``spec`` a dict of this tool's options (shape,
-    closures, particles, threads, width, settings, drag, hold, start, quick, out). Returns the result
-    object (see the module docstring). A module-level function, so that the sweep engine can run
-    several ramps as tasks."""
+    closures, particles, threads, width, settings, drag, hold, start, quick, out, resume). Returns the
+    result object (see the module docstring). A module-level function, so that the sweep engine can run
+    several ramps as tasks.
+
+    The ramp runs in its own run folder (``OUT/ramp_<tag>``): a checkpoint at the end of the start and
+    of every hold, the holds done in ``ramp.json``. ``resume`` continues a killed ramp from its last
+    finished hold, bit for bit; without it an existing folder is replaced."""
     o = dict(spec)
     wall0, cpu0 = time.perf_counter(), time.process_time()
     shape = o["shape"]
     umf_exp = EXPERIMENT[shape]
-    case = build_case(shape, o["closures"], o["particles"], o["threads"], o["width"], o["settings"], o["drag"])
-    sim = fvdem.Simulation(case)
+    tag = shape if shape == "sphere" else f"{shape}_{o['closures']}"
+    if o["drag"] != "paper":
+        tag += f"_{o['drag']}"
+    table = reduced_bed_table(shape, o["closures"], o["particles"], o["threads"], o["width"], o["settings"],
+                              o["drag"])
+    # checkpoints only where run() ends (the start and each hold); samples every SAMPLE s; no snapshots
+    table["output"].update(timeseries_interval=SAMPLE, checkpoint_interval=1e6, vtk=False)
+    case = case_from_dict(table)
+    folder = Path(o["out"]) / f"ramp_{tag}"
+    progress_file = folder / "ramp.json"
+    resume = bool(o.get("resume")) and (folder / "checkpoint.npz").exists() and progress_file.exists()
+    sim = fvdem.Simulation(case, folder, resume=resume, overwrite=not resume, threads=o["threads"] or None,
+                           progress=False)
     weight = weight_per_area(sim.model)
     box = case.domain
     area = float(np.prod(np.asarray(box.upper[:2]) - np.asarray(box.lower[:2])))
     solid_volume = float(spherocylinder_volume(sim.particles.radius, sim.particles.half_length).sum())
-    sim.run(o["start"])
     ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
     if o["quick"]:
         ratios = [2.0, 1.3, 1.0, 0.7, 0.4]
-    tag = shape if shape == "sphere" else f"{shape}_{o['closures']}"
-    if o["drag"] != "paper":
-        tag += f"_{o['drag']}"
-    curve = []
-    for ratio in ratios:
+    curve = json.loads(progress_file.read_text())["curve"] if resume else []
+    if not resume:
+        sim.run(o["start"])
+        progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
+    else:
+        # the checkpoint is the end of the start or of a hold; a hold whose checkpoint was written but
+        # not its entry (killed in between) is completed from the time series and the restored bed
+        done = int(round((sim.time - o["start"]) / o["hold"]))
+        if done > len(curve):
+            u = ratios[len(curve)] * umf_exp
+            sim.gas.solver.set_inlet_velocity(u)
+            curve.append(_hold_entry(sim, folder, u, o["hold"], weight, solid_volume, area))
+        print(f"{tag}: resumed at t = {sim.time:.4f} s after {len(curve)} of {len(ratios)} holds", flush=True)
+    for ratio in ratios[len(curve):]:
         u = ratio * umf_exp
         sim.gas.solver.set_inlet_velocity(u)
-        drop, spread = mean_pressure_drop(sim, o["hold"])
-        # the bed as it is at the end of this hold: the uniform bed of its core packing and equivalent
-        # height under the closure, at this velocity (the CFD-DEM's own error, hold by hold)
-        hold_packing = packed_state(sim)
-        solid_height = solid_volume / area
-        uniform = uniform_bed_pressure_gradient(sim.bridge.model, 1.0 - hold_packing["solids_fraction"], u,
-                                                hold_packing["axes"]) * solid_height / hold_packing["solids_fraction"]
-        curve.append({"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
-                      "over_weight": drop / weight, "packed_solids_fraction": hold_packing["solids_fraction"],
-                      "closure_uniform_bed_over_weight": uniform / weight})
-        print(f"{tag}: U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {drop:.1f} Pa = {drop / weight:.3f} W/A "
-              f"(+- {spread:.1f}); core solids {hold_packing['solids_fraction']:.4f}, a uniform bed of it "
-              f"{uniform / weight:.3f} W/A", flush=True)
+        sim.run(o["hold"])
+        curve.append(_hold_entry(sim, folder, u, o["hold"], weight, solid_volume, area))
+        tmp = progress_file.with_suffix(".tmp")
+        tmp.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
+        tmp.replace(progress_file)
+        c = curve[-1]
+        print(f"{tag}: U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {c['pressure_drop']:.1f} Pa = "
+              f"{c['over_weight']:.3f} W/A (+- {c['pressure_drop_std']:.1f}); core solids "
+              f"{c['packed_solids_fraction']:.4f}, a uniform bed of it {c['closure_uniform_bed_over_weight']:.3f} W/A",
+              flush=True)
     velocity = [c["velocity"] for c in curve]
     drop = [c["pressure_drop"] for c in curve]
     plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp)
@@ -243,6 +286,8 @@ def main(argv=None):
                         "LocalCluster workers, each ramp on --threads threads")
     parser.add_argument("--scheduler", help="address of a running Dask scheduler to send the ramps to")
     parser.add_argument("--out", default=".")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue killed ramps from their last finished hold (OUT/ramp_<tag>)")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
                         help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
@@ -255,7 +300,7 @@ def main(argv=None):
     Path(args.out).mkdir(parents=True, exist_ok=True)  # before the ramp: its chart must not fail after it
     specs = [{"shape": shape, "closures": args.closures, "particles": args.particles, "threads": args.threads,
               "width": args.width, "settings": args.settings, "drag": drag, "hold": args.hold, "start": args.start,
-              "quick": args.quick, "out": str(Path(args.out).resolve())}
+              "quick": args.quick, "out": str(Path(args.out).resolve()), "resume": args.resume}
              for shape in args.shape for drag in args.drag]
     if len(specs) == 1:  # one ramp: in this process, its output as before
         result = ramp(specs[0])
