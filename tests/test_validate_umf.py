@@ -53,7 +53,7 @@ def test_a_killed_ramp_resumes_from_its_last_hold_bit_for_bit(tmp_path, monkeypa
     ramp's, bit for bit."""
     spec = {"shape": "sphere", "closures": "mp", "particles": 500, "threads": 1, "width": 0.06,
             "settings": "default", "drag": "paper", "hold": 0.06, "start": 0.15, "quick": True,
-            "out": str(tmp_path / "straight")}
+            "plateau_hold": 0.08, "out": str(tmp_path / "straight")}
     straight = tool.ramp(spec)
     original, calls = tool._hold_entry, []
 
@@ -71,6 +71,9 @@ def test_a_killed_ramp_resumes_from_its_last_hold_bit_for_bit(tmp_path, monkeypa
     assert len(progress["curve"]) == 2
     resumed = tool.ramp(dict(killed, resume=True))
     assert resumed["curve"] == straight["curve"] and len(resumed["curve"]) == 5
+    # the plateau's holds (2.0 and 1.3 Umf,exp) took --plateau-hold, the others --hold
+    ends = [c["end_time"] for c in straight["curve"]]
+    assert np.allclose(np.diff([0.15] + ends), [0.08, 0.08, 0.06, 0.06, 0.06])
     assert resumed["umf_simulated"] == straight["umf_simulated"]
     # without --resume an existing ramp folder is started again, not mixed into
     again = tool.ramp(dict(killed))

@@ -200,6 +200,10 @@ def ramp(spec, threads=None):
     ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
     if o["quick"]:
         ratios = [2.0, 1.3, 1.0, 0.7, 0.4]
+    # the fluidized holds (at and above 1.3 Umf,exp: the plateau) may be longer: a slugging bed's
+    # pressure drop swings over ~0.5 s, so a 0.25 s hold averages a fraction of one swing
+    plateau_hold = o.get("plateau_hold") or o["hold"]
+    holds = [plateau_hold if ratio >= 1.3 else o["hold"] for ratio in ratios]
     curve = json.loads(progress_file.read_text())["curve"] if resume else []
     if not resume:
         sim.run(o["start"])
@@ -207,17 +211,18 @@ def ramp(spec, threads=None):
     else:
         # the checkpoint is the end of the start or of a hold; a hold whose checkpoint was written but
         # not its entry (killed in between) is completed from the time series and the restored bed
-        done = int(round((sim.time - o["start"]) / o["hold"]))
+        ends = o["start"] + np.cumsum(holds)
+        done = int(np.sum(ends <= sim.time + 0.5 * SAMPLE))
         if done > len(curve):
             u = ratios[len(curve)] * umf_exp
             sim.gas.solver.set_inlet_velocity(u)
-            curve.append(_hold_entry(sim, folder, u, o["hold"], weight, solid_volume, area))
+            curve.append(_hold_entry(sim, folder, u, holds[len(curve)], weight, solid_volume, area))
         print(f"{tag}: resumed at t = {sim.time:.4f} s after {len(curve)} of {len(ratios)} holds", flush=True)
-    for ratio in ratios[len(curve):]:
+    for ratio, hold in list(zip(ratios, holds))[len(curve):]:
         u = ratio * umf_exp
         sim.gas.solver.set_inlet_velocity(u)
-        sim.run(o["hold"])
-        curve.append(_hold_entry(sim, folder, u, o["hold"], weight, solid_volume, area))
+        sim.run(hold)
+        curve.append(_hold_entry(sim, folder, u, hold, weight, solid_volume, area))
         tmp = progress_file.with_suffix(".tmp")
         tmp.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
         tmp.replace(progress_file)
@@ -259,7 +264,7 @@ def ramp(spec, threads=None):
                f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
                "property of particles and gas)",
         "settings": o["settings"],
-        "hold_seconds": o["hold"], "curve": curve, "plot": str(png), "defluidized_state": str(state),
+        "hold_seconds": o["hold"], "plateau_hold_seconds": plateau_hold, "curve": curve, "plot": str(png), "defluidized_state": str(state),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
     }
 
@@ -272,6 +277,8 @@ def main(argv=None):
     parser.add_argument("--particles", type=int, default=2000)
     parser.add_argument("--hold", type=float, default=0.25, help="seconds at each velocity")
     parser.add_argument("--start", type=float, default=0.5, help="seconds fluidized before the ramp")
+    parser.add_argument("--plateau-hold", type=float, help="seconds at each velocity at and above 1.3 Umf,exp "
+                        "(the plateau; default: --hold): a slugging bed needs longer averages there")
     parser.add_argument("--quick", action="store_true", help="500 particles, short holds (a smoke test)")
     parser.add_argument("--threads", type=int, default=0)
     parser.add_argument("--width", type=float, default=0.06, help="column width [m] (a multiple of the 15 mm cells); "
@@ -300,7 +307,8 @@ def main(argv=None):
     Path(args.out).mkdir(parents=True, exist_ok=True)  # before the ramp: its chart must not fail after it
     specs = [{"shape": shape, "closures": args.closures, "particles": args.particles, "threads": args.threads,
               "width": args.width, "settings": args.settings, "drag": drag, "hold": args.hold, "start": args.start,
-              "quick": args.quick, "out": str(Path(args.out).resolve()), "resume": args.resume}
+              "quick": args.quick, "out": str(Path(args.out).resolve()), "resume": args.resume,
+              "plateau_hold": args.plateau_hold}
              for shape in args.shape for drag in args.drag]
     if len(specs) == 1:  # one ramp: in this process, its output as before
         result = ramp(specs[0])
