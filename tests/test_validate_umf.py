@@ -47,10 +47,10 @@ def test_fixed_branch_coefficients_are_non_negative():
 
 
 def test_a_killed_ramp_resumes_from_its_last_hold_bit_for_bit(tmp_path, monkeypatch):
-    """A ramp checkpoints at the end of its start and of every hold. Killed after a hold's checkpoint
-    but before its point was recorded (the worst moment), `resume` completes that hold from the time
-    series and the restored bed, then continues: the curve and the fitted Umf are the uninterrupted
-    ramp's, bit for bit."""
+    """A ramp checkpoints every 0.05 s and at a stop. Killed after a hold's last checkpoint but before
+    its point was recorded (the worst moment), `resume` completes that hold from the time series and
+    the restored bed; stopped inside a hold, it runs the hold's rest: either way the curve and the
+    fitted Umf are the uninterrupted ramp's, bit for bit."""
     spec = {"shape": "sphere", "closures": "mp", "particles": 500, "threads": 1, "width": 0.06,
             "settings": "default", "drag": "paper", "hold": 0.06, "start": 0.15, "quick": True,
             "plateau_hold": 0.08, "out": str(tmp_path / "straight")}
@@ -75,6 +75,25 @@ def test_a_killed_ramp_resumes_from_its_last_hold_bit_for_bit(tmp_path, monkeypa
     ends = [c["end_time"] for c in straight["curve"]]
     assert np.allclose(np.diff([0.15] + ends), [0.08, 0.08, 0.06, 0.06, 0.06])
     assert resumed["umf_simulated"] == straight["umf_simulated"]
+    # stopped (SIGTERM) inside a hold: the checkpoint falls mid-hold, the ramp says so and records
+    # nothing; resumed, it runs the rest of that hold and ends as the straight ramp
+    import fvdem
+    original_run, runs = fvdem.Simulation.run, []
+
+    def stopped_in_the_fourth_run(self, duration=None):
+        runs.append(duration)
+        if len(runs) == 4:
+            summary = original_run(self, 0.5 * duration)
+            self._stop_requested = True  # what the SIGTERM handler sets
+            return summary
+        return original_run(self, duration)
+    monkeypatch.setattr(fvdem.Simulation, "run", stopped_in_the_fourth_run)
+    stopped = dict(spec, out=str(tmp_path / "stopped"))
+    with pytest.raises(tool.RampStopped, match="--resume"):
+        tool.ramp(stopped)
+    monkeypatch.setattr(fvdem.Simulation, "run", original_run)
+    assert len(json.loads((tmp_path / "stopped" / "ramp_sphere" / "ramp.json").read_text())["curve"]) == 2
+    assert tool.ramp(dict(stopped, resume=True))["curve"] == straight["curve"]
     # without --resume an existing ramp folder is started again, not mixed into
     again = tool.ramp(dict(killed))
     assert again["curve"] == straight["curve"]

@@ -24,9 +24,10 @@ Several shapes or drag laws give one ramp each, run as tasks on fvdem's sweep en
 clients of ``fvdem study``: ``--workers`` for a LocalCluster, ``--scheduler`` for a running one); each
 ramp stays sequential. The last line is then ``{"ramps": [...], "plot": ..., "wall_seconds": ...}``.
 
-Each ramp runs in its own run folder, ``OUT/ramp_<tag>`` (time series, a checkpoint at the end of the
-start and of every hold, the holds done in ``ramp.json``); ``--resume`` continues killed ramps from
-their last finished hold, bit for bit (a ramp of the paper's AR-4 bed takes hours).
+Each ramp runs in its own run folder, ``OUT/ramp_<tag>`` (time series, a checkpoint every 0.05 s and at
+a stop, the holds done in ``ramp.json``); ``--resume`` continues killed or stopped ramps from their last
+checkpoint, bit for bit (a ramp of the paper's AR-4 bed takes hours). Ctrl-C or SIGTERM stop a ramp
+with its checkpoint written (exit code 130).
 
 Prints progress, writes ``umf_<shape>[_<closures>].png`` (pressure drop over weight against U)
 and, as the last line, one JSON object.
@@ -167,15 +168,25 @@ def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
             "closure_uniform_bed_over_weight": uniform / weight, "end_time": sim.time}
 
 
+class RampStopped(RuntimeError):
+    """A ramp stopped by SIGINT/SIGTERM, its checkpoint written: ``--resume`` continues it."""
+
+
+def _stopped(sim, tag):
+    if sim.stopped_early:
+        raise RampStopped(f"{tag}: stopped at t = {sim.time:.4f} s with its checkpoint written; the same command "
+                          "with --resume continues the ramp")
+
+
 def ramp(spec, threads=None):
     """One defluidization ramp (sequential by nature): ``spec`` a dict of this tool's options (shape,
     closures, particles, threads, width, settings, drag, hold, start, quick, out, resume). Returns the
     result object (see the module docstring). A module-level function, so that the sweep engine can run
     several ramps as tasks.
 
-    The ramp runs in its own run folder (``OUT/ramp_<tag>``): a checkpoint at the end of the start and
-    of every hold, the holds done in ``ramp.json``. ``resume`` continues a killed ramp from its last
-    finished hold, bit for bit; without it an existing folder is replaced."""
+    The ramp runs in its own run folder (``OUT/ramp_<tag>``): a checkpoint every 0.05 s and at a stop,
+    the holds done in ``ramp.json``. ``resume`` continues a killed or stopped ramp from its last
+    checkpoint, inside a hold or the start, bit for bit; without it an existing folder is replaced."""
     o = dict(spec)
     wall0, cpu0 = time.perf_counter(), time.process_time()
     shape = o["shape"]
@@ -185,8 +196,8 @@ def ramp(spec, threads=None):
         tag += f"_{o['drag']}"
     table = reduced_bed_table(shape, o["closures"], o["particles"], o["threads"], o["width"], o["settings"],
                               o["drag"])
-    # checkpoints only where run() ends (the start and each hold); samples every SAMPLE s; no snapshots
-    table["output"].update(timeseries_interval=SAMPLE, checkpoint_interval=1e6, vtk=False)
+    # checkpoints every 0.05 s and where run() ends (a stop); samples every SAMPLE s; no snapshots
+    table["output"].update(timeseries_interval=SAMPLE, checkpoint_interval=0.05, vtk=False)
     case = case_from_dict(table)
     folder = Path(o["out"]) / f"ramp_{tag}"
     progress_file = folder / "ramp.json"
@@ -205,24 +216,23 @@ def ramp(spec, threads=None):
     plateau_hold = o.get("plateau_hold") or o["hold"]
     holds = [plateau_hold if ratio >= 1.3 else o["hold"] for ratio in ratios]
     curve = json.loads(progress_file.read_text())["curve"] if resume else []
-    if not resume:
-        sim.run(o["start"])
-        progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
-    else:
-        # the checkpoint is the end of the start or of a hold; a hold whose checkpoint was written but
-        # not its entry (killed in between) is completed from the time series and the restored bed
-        ends = o["start"] + np.cumsum(holds)
-        done = int(np.sum(ends <= sim.time + 0.5 * SAMPLE))
-        if done > len(curve):
-            u = ratios[len(curve)] * umf_exp
-            sim.gas.solver.set_inlet_velocity(u)
-            curve.append(_hold_entry(sim, folder, u, holds[len(curve)], weight, solid_volume, area))
+    if resume:
         print(f"{tag}: resumed at t = {sim.time:.4f} s after {len(curve)} of {len(ratios)} holds", flush=True)
-    for ratio, hold in list(zip(ratios, holds))[len(curve):]:
-        u = ratio * umf_exp
+    if sim.time < o["start"] - 0.5 * SAMPLE:  # the start (all of it, or its rest after a stop)
+        sim.run(o["start"] - sim.time)
+        _stopped(sim, tag)
+        progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
+    ends = o["start"] + np.cumsum(holds)
+    for k in range(len(curve), len(ratios)):
+        # a hold from its start, or its rest after a stop (a stop's checkpoint falls inside a hold; a
+        # kill between a hold's end checkpoint and its record leaves nothing to run: the point is
+        # completed from the time series and the restored bed)
+        ratio, u = ratios[k], ratios[k] * umf_exp
         sim.gas.solver.set_inlet_velocity(u)
-        sim.run(hold)
-        curve.append(_hold_entry(sim, folder, u, hold, weight, solid_volume, area))
+        if ends[k] - sim.time > 0.5 * SAMPLE:
+            sim.run(ends[k] - sim.time)
+            _stopped(sim, tag)
+        curve.append(_hold_entry(sim, folder, u, holds[k], weight, solid_volume, area))
         tmp = progress_file.with_suffix(".tmp")
         tmp.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
         tmp.replace(progress_file)
@@ -294,7 +304,7 @@ def main(argv=None):
     parser.add_argument("--scheduler", help="address of a running Dask scheduler to send the ramps to")
     parser.add_argument("--out", default=".")
     parser.add_argument("--resume", action="store_true",
-                        help="continue killed ramps from their last finished hold (OUT/ramp_<tag>)")
+                        help="continue killed or stopped ramps from their last checkpoint (OUT/ramp_<tag>)")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
                         help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
@@ -311,7 +321,11 @@ def main(argv=None):
               "plateau_hold": args.plateau_hold}
              for shape in args.shape for drag in args.drag]
     if len(specs) == 1:  # one ramp: in this process, its output as before
-        result = ramp(specs[0])
+        try:
+            result = ramp(specs[0])
+        except RampStopped as exc:
+            print(exc, file=sys.stderr)
+            raise SystemExit(130) from None
         print(json.dumps(result) if args.json else json.dumps(result, indent=2))
         return
     # several ramps: tasks on fvdem's sweep engine (the Dask clients of fvdem study); each stays sequential
