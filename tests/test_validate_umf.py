@@ -75,25 +75,28 @@ def test_a_killed_ramp_resumes_from_its_last_hold_bit_for_bit(tmp_path, monkeypa
     ends = [c["end_time"] for c in straight["curve"]]
     assert np.allclose(np.diff([0.15] + ends), [0.08, 0.08, 0.06, 0.06, 0.06])
     assert resumed["umf_simulated"] == straight["umf_simulated"]
-    # stopped (SIGTERM) inside a hold: the checkpoint falls mid-hold, the ramp says so and records
-    # nothing; resumed, it runs the rest of that hold and ends as the straight ramp
+    # stopped (SIGTERM) inside the start or inside a hold: the checkpoint falls mid-way, the ramp says
+    # so and records nothing; resumed, it runs the rest and ends as the straight ramp
     import fvdem
-    original_run, runs = fvdem.Simulation.run, []
+    original_run = fvdem.Simulation.run
+    for stop_in, recorded in ((1, 0), (4, 2)):  # the start; the third hold
+        runs = []
 
-    def stopped_in_the_fourth_run(self, duration=None):
-        runs.append(duration)
-        if len(runs) == 4:
-            summary = original_run(self, 0.5 * duration)
-            self._stop_requested = True  # what the SIGTERM handler sets
-            return summary
-        return original_run(self, duration)
-    monkeypatch.setattr(fvdem.Simulation, "run", stopped_in_the_fourth_run)
-    stopped = dict(spec, out=str(tmp_path / "stopped"))
-    with pytest.raises(tool.RampStopped, match="--resume"):
-        tool.ramp(stopped)
-    monkeypatch.setattr(fvdem.Simulation, "run", original_run)
-    assert len(json.loads((tmp_path / "stopped" / "ramp_sphere" / "ramp.json").read_text())["curve"]) == 2
-    assert tool.ramp(dict(stopped, resume=True))["curve"] == straight["curve"]
+        def stopped_in_a_run(self, duration=None):
+            runs.append(duration)
+            if len(runs) == stop_in:
+                summary = original_run(self, 0.5 * duration)
+                self._stop_requested = True  # what the SIGTERM handler sets
+                return summary
+            return original_run(self, duration)
+        monkeypatch.setattr(fvdem.Simulation, "run", stopped_in_a_run)
+        stopped = dict(spec, out=str(tmp_path / f"stopped_{stop_in}"))
+        with pytest.raises(tool.RampStopped, match="--resume"):
+            tool.ramp(stopped)
+        monkeypatch.setattr(fvdem.Simulation, "run", original_run)
+        progress = json.loads((tmp_path / f"stopped_{stop_in}" / "ramp_sphere" / "ramp.json").read_text())
+        assert len(progress["curve"]) == recorded
+        assert tool.ramp(dict(stopped, resume=True))["curve"] == straight["curve"]
     # without --resume an existing ramp folder is started again, not mixed into
     again = tool.ramp(dict(killed))
     assert again["curve"] == straight["curve"]
