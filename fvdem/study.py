@@ -229,14 +229,14 @@ def _study_stop_file(folder) -> Path:
 def _simulated_so_far(folder: Path, live: bool = False) -> float:
     """Simulated seconds a run folder holds: its summary's, else its checkpoint's (0 for a new run);
     ``live``: the last line of its time series instead of the checkpoint (a run in progress)."""
-    summary = folder / "summary.json"
     try:
-        if summary.exists() and not json.loads(summary.read_text()).get("stopped_early"):
-            return float(json.loads(summary.read_text())["simulated_time"])
+        summary = json.loads((folder / "summary.json").read_text()) if (folder / "summary.json").exists() else None
+        if summary is not None and not summary.get("stopped_early"):
+            return float(summary["simulated_time"])
         if live and (folder / "timeseries.csv").exists():
             return _last_time(folder / "timeseries.csv")
-        if summary.exists():
-            return float(json.loads(summary.read_text())["simulated_time"])
+        if summary is not None:
+            return float(summary["simulated_time"])
         if (folder / "checkpoint.npz").exists():
             import numpy as np
             with np.load(folder / "checkpoint.npz") as data:
