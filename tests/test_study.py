@@ -419,8 +419,12 @@ def test_a_slurm_cluster_table_submits_one_job_per_worker_with_the_runs_threads_
     from fvdem.study import close_client, make_client
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
-    log = tmp_path / "submitted"
-    (bin_dir / "sbatch").write_text(f'#!/bin/sh\ncat "$@" >> {log}\necho "----" >> {log}\necho "Submitted batch job 4242"\n')
+    jobs = tmp_path / "submitted"
+    jobs.mkdir()
+    # one file per submission: dask-jobqueue submits the workers' jobs concurrently, so a shared log
+    # interleaves their scripts
+    (bin_dir / "sbatch").write_text(f'#!/bin/sh\ncat "$@" > {jobs}/job.$$.tmp && mv {jobs}/job.$$.tmp {jobs}/job.$$\n'
+                                    'echo "Submitted batch job $$"\n')
     (bin_dir / "scancel").write_text(f'#!/bin/sh\necho "scancel $@" >> {tmp_path / "cancelled"}\n')
     (bin_dir / "squeue").write_text("#!/bin/sh\nexit 0\n")
     for tool in bin_dir.iterdir():
@@ -430,10 +434,11 @@ def test_a_slurm_cluster_table_submits_one_job_per_worker_with_the_runs_threads_
                                         "queue": "compute"}, None, None, threads=4)
     try:
         deadline = time.time() + 60
-        while (not log.exists() or log.read_text().count("----") < 2) and time.time() < deadline:
+        while len(list(jobs.glob("job.*[0-9]"))) < 2 and time.time() < deadline:
             time.sleep(0.2)
         assert description == "SLURMCluster(2 jobs)"
-        scripts = log.read_text().split("----")[:2]
+        scripts = [path.read_text() for path in sorted(jobs.glob("job.*[0-9]"))]
+        assert len(scripts) == 2
         for script in scripts:
             assert "#SBATCH --cpus-per-task=4" in script and "#SBATCH -p compute" in script
             assert "#SBATCH -t 02:00:00" in script and "--nthreads 1" in script
