@@ -219,6 +219,11 @@ class GasConfig:
     correctors: int = spec(2, kind="int", ge=1, le=100, doc="PISO pressure corrections per step")
     linear_solver: str = spec("iterative", kind="str", choices=("iterative", "direct"))
     linear_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0, doc="relative tolerance of the linear solves")
+    pressure_preconditioner: str = spec("multigrid", kind="str", choices=("multigrid", "factorization"),
+                                        doc="preconditioner of the pressure correction's CG (iterative solves): "
+                                            "'multigrid' (aggregation multigrid built from each step's matrix; walled "
+                                            "columns) or 'factorization' (the LU of a recent matrix, renewed as the bed "
+                                            "moves; always used in periodic boxes)")
     simple_tolerance: float = spec(1.0e-8, gt=0.0, lt=1.0,
                                    doc="SIMPLE: iterate each step until the continuity residual and the relative "
                                        "velocity change are below this")

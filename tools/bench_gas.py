@@ -8,10 +8,15 @@ like a bubbling bed (a few Hz, so d(eps)/dt stays physical), gas inlet at 2 U_mf
 particles, CFD step 1e-4 s, PISO with two pressure correctors. Reports the fast path (cached
 operators, warm-started Krylov solvers) and the reference path (the same steps with every system
 rebuilt from plain FiPy terms and solved directly), and their largest relative difference after
-the reference steps. The last line of output is one JSON object:
+the reference steps. ``preconditioners`` compares the pressure correction's two preconditioners
+(``gas.pressure_preconditioner``) on the same steps, run in alternating chunks of 10 steps so that
+the machine's drift falls on both: per preconditioner the median ms per CFD step, the pressure
+phase's ms per step and the CG iterations per step. The last line of output is one JSON object:
 
     {"ms_per_cfd_step": ..., "assembly_ms": ..., "solve_ms": ..., "reference_ms_per_cfd_step": ...,
-     "max_relative_difference_to_reference": ..., "direct_fallbacks": ..., "machine": {...}}
+     "max_relative_difference_to_reference": ..., "direct_fallbacks": ...,
+     "preconditioners": {"multigrid": {...}, "factorization": {...}, "factorization_over_multigrid": ...},
+     "machine": {...}}
 """
 from __future__ import annotations
 
@@ -99,6 +104,25 @@ def main() -> int:
     scale = np.abs(reference.velocity).max()
     difference = float(max(np.abs(check.velocity - reference.velocity).max() / scale,
                            np.abs(check.pressure - reference.pressure).max() / np.abs(reference.pressure).max()))
+    # the two pressure preconditioners on the same steps, alternating chunks
+    pair = {name: fresh(linear_solver="iterative", linear_tolerance=1e-8, pressure_preconditioner=name)
+            for name in ("multigrid", "factorization")}
+    steps = {name: [] for name in pair}
+    iterations = {name: 0 for name in pair}
+    for solver in pair.values():
+        run(solver, mesh, 3)
+        solver.timings.seconds["gas_pressure"] = 0.0
+    for start in range(3, 3 + args.steps, 10):
+        for name, solver in pair.items():
+            for k in range(start, min(start + 10, 3 + args.steps)):
+                steps[name] += run(solver, mesh, 1, start=k)
+                iterations[name] += solver._step_iterations
+    preconditioners = {name: {"ms_per_cfd_step": 1e3 * float(np.median(steps[name])),
+                              "pressure_ms_per_cfd_step": 1e3 * pair[name].timings.seconds["gas_pressure"] / args.steps,
+                              "cg_iterations_per_cfd_step": iterations[name] / args.steps,
+                              "direct_fallbacks": pair[name].direct_fallbacks} for name in pair}
+    preconditioners["factorization_over_multigrid"] = (preconditioners["factorization"]["ms_per_cfd_step"]
+                                                       / preconditioners["multigrid"]["ms_per_cfd_step"])
     result = {
         "ms_per_cfd_step": step_ms,
         "cpu_ms_per_cfd_step": 1e3 * cpu / args.steps,
@@ -108,6 +132,7 @@ def main() -> int:
         "max_relative_difference_to_reference": difference,
         "direct_fallbacks": fast.direct_fallbacks,
         "pressure_factorizations": fast.factorizations,
+        "preconditioners": preconditioners,
         "cells": mesh.cell_count,
         "machine": {"date": datetime.datetime.now().isoformat(timespec="seconds"), "cores": os.cpu_count(),
                     "load_average": os.getloadavg()},

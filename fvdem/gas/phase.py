@@ -31,7 +31,8 @@ class GasPhase:
         self.solver = GasSolver(self.mesh, GasProperties(g.density, g.viscosity), case.domain.gravity,
                                 inlet_velocity=g.inlet_velocity, walls=g.walls, scheme=g.scheme,
                                 correctors=g.correctors, linear_solver=g.linear_solver,
-                                linear_tolerance=g.linear_tolerance, tolerance=g.simple_tolerance)
+                                linear_tolerance=g.linear_tolerance, tolerance=g.simple_tolerance,
+                                pressure_preconditioner=g.pressure_preconditioner)
         self.dt = g.cfd_step
         self.step_count = 0
         zone = g.porous_zone
@@ -203,7 +204,7 @@ class GasPhase:
             # the inlet as the uninterrupted run left it: __init__ set it to 0 for the ramp's start, and
             # the ramp only updates it while it lasts (a run resumed after its end kept no inflow at all)
             s.set_inlet_velocity(self.inlet_velocity_at(self.step_count * self.dt))
-        if "gas.preconditioner.data" in data:
+        if "gas.preconditioner.data" in data and s._multigrid is None:  # (multigrid keeps no preconditioner)
             import scipy.sparse as sp
             matrix = sp.csc_matrix((data["gas.preconditioner.data"], data["gas.preconditioner.indices"],
                                     data["gas.preconditioner.indptr"]), shape=tuple(data["gas.preconditioner.shape"]))

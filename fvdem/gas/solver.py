@@ -41,6 +41,7 @@ import scipy.sparse.linalg as spla
 
 from .mesh import GasMesh, fipy_momentum_system, fipy_pressure_system
 from ..timing import Timings
+from . import multigrid
 from .krylov import bicgstab_jacobi
 from .operators import DiffusionOperator, StencilPattern, UpwindConvectionOperator
 
@@ -78,7 +79,8 @@ class GasSolver:
                  inlet_velocity: float = 0.0, walls: str = "no-slip", relax_velocity: float = 0.7,
                  relax_pressure: float = 0.3, tolerance: float = 1e-8, max_iterations: int = 200,
                  assembly: str = "cached", scheme: str = "simple", correctors: int = 2,
-                 linear_solver: str = "direct", linear_tolerance: float = 1e-10):
+                 linear_solver: str = "direct", linear_tolerance: float = 1e-10,
+                 pressure_preconditioner: str = "multigrid"):
         self.timings = Timings()  # momentum and pressure phases (a Model shares one)
         self.mesh = mesh
         self.gas = gas
@@ -95,6 +97,10 @@ class GasSolver:
             raise ValueError(f"scheme = {scheme!r}: expected 'simple' or 'piso'")
         if linear_solver not in ("direct", "iterative"):
             raise ValueError(f"linear_solver = {linear_solver!r}: expected 'direct' or 'iterative'")
+        if pressure_preconditioner not in ("multigrid", "factorization"):
+            raise ValueError(f"pressure_preconditioner = {pressure_preconditioner!r}: expected 'multigrid' or "
+                             "'factorization'")
+        self.pressure_preconditioner = pressure_preconditioner
         self.scheme, self.correctors = scheme, int(correctors)
         self.linear_solver, self.linear_tolerance = linear_solver, float(linear_tolerance)
         n, f = mesh.cell_count, mesh.face_count
@@ -190,6 +196,18 @@ class GasSolver:
         layer = mesh.shape[0] * mesh.shape[1]
         self._inlet_above = self._inlet_cells + layer if len(self._inlet) and mesh.shape[2] > 1 else None
         self.face_flux[self._inlet] = self._inlet_flux
+        self._multigrid = None  # the pressure correction's multigrid stencil map (walled grids, iterative solves)
+        if (pressure_preconditioner == "multigrid" and linear_solver == "iterative" and assembly == "cached"
+                and not any(mesh.periodic)):
+            low = np.minimum(self._p, self._q)
+            high = np.maximum(self._p, self._q)
+            nx, ny, _ = mesh.shape
+            stride = np.array([1, nx, nx * ny])[self._interior_axis]
+            if np.all(high - low == stride):  # cells numbered x fastest: the grid's 7-point stencil
+                self._multigrid = (self._interior.astype(np.int64), low.astype(np.int64), high.astype(np.int64),
+                                   self._interior_axis.astype(np.int64), self._outlet.astype(np.int64),
+                                   mesh.face_cells[self._outlet, 0].astype(np.int64))
+                self._face_conductance = mesh.face_areas / mesh.face_distances
 
     # ------------------------------------------------------------------ helpers
     def set_inlet_velocity(self, velocity: float) -> None:
@@ -441,12 +459,14 @@ class GasSolver:
         flux[self._closed] = 0.0
         flux[self._inlet] = self._inlet_flux
         imbalance = self._net_outflow(flux) + (eps - eps_old) * vol / dt
-        laplacian = self._pressure_system(k_face).tocsr()
         p_corr = np.zeros(mesh.cell_count)
-        if self.periodic:  # pressure fixed up to a constant: pin cell 0
+        if self._multigrid is not None:
+            p_corr = self._multigrid_correction(k_face, imbalance)
+        elif self.periodic:  # pressure fixed up to a constant: pin cell 0
+            laplacian = self._pressure_system(k_face).tocsr()
             p_corr[1:] = self._solve(laplacian[1:, 1:], imbalance[1:], p_corr[1:], symmetric_negative=True)
         else:
-            p_corr = self._solve(laplacian, imbalance, p_corr, symmetric_negative=True)
+            p_corr = self._solve(self._pressure_system(k_face).tocsr(), imbalance, p_corr, symmetric_negative=True)
         flux_corr = -k_face * mesh.face_areas * self._face_difference(p_corr)
         flux_corr[self._closed] = 0.0
         flux_corr[self._inlet] = 0.0
@@ -468,6 +488,28 @@ class GasSolver:
         target = gradient - self._gauss_gradient(self._linear_face_pressure(corrected))
         self.gradient_correction += GRADIENT_RELAXATION * (target - self.gradient_correction)
         return np.abs(imbalance).max() / max(np.abs(self.face_flux).max(), 1e-30)
+
+    def _multigrid_correction(self, k_face, imbalance):
+        """The pressure correction ``div(k_f grad p') = imbalance`` by multigrid-preconditioned CG
+        (``fvdem.gas.multigrid``; no sparse matrix is assembled), from zero to ``linear_tolerance``; a
+        solve that fails falls back to a direct one (counted in ``direct_fallbacks``)."""
+        faces, low, high, axis, outlet, outlet_cells = self._multigrid
+        n = self.mesh.cell_count
+        d, cx, cy, cz = multigrid.stencil_from_faces(k_face, self._face_conductance, faces, low, high, axis, outlet,
+                                                     outlet_cells, n)
+        rhs = -np.asarray(imbalance, float)
+        solution = np.zeros(n)
+        try:
+            hierarchy = multigrid.build(d, cx, cy, cz, self.mesh.shape)
+            info, iterations = multigrid.pcg(*hierarchy.arrays(), rhs, solution, self.linear_tolerance, 1000,
+                                             multigrid.OVER_CORRECTION)
+        except ValueError:  # a non-positive diagonal: not a definite system
+            info, iterations = -1, 0
+        self._step_iterations += iterations
+        if info != 0 or not np.all(np.isfinite(solution)):
+            self.direct_fallbacks += 1
+            return spla.spsolve((-self._pressure_system(k_face)).tocsc(), rhs)
+        return solution
 
     def _face_difference(self, cell_values):
         """``(phi_N - phi_P) / d`` on interior faces, ``(0 - phi_P) / d`` on outlet faces, else 0."""
