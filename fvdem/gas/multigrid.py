@@ -134,6 +134,23 @@ def _coarsen(d, cx, cy, cz, nx, ny, nz, cd, ccx, ccy, ccz):
                         ccz[block] += cz[c]
 
 
+@njit(cache=True)
+def _dense_level(d, cx, cy, cz, b0, nx, ny, nz):
+    """The level starting at ``b0`` as a dense symmetric matrix (the coarsest grid's exact solve)."""
+    n = nx * ny * nz
+    dense = np.zeros((n, n))
+    for c in range(n):
+        i, j, k = c % nx, (c // nx) % ny, c // (nx * ny)
+        dense[c, c] = d[b0 + c]
+        if i < nx - 1:
+            dense[c, c + 1] = dense[c + 1, c] = cx[b0 + c]
+        if j < ny - 1:
+            dense[c, c + nx] = dense[c + nx, c] = cy[b0 + c]
+        if k < nz - 1:
+            dense[c, c + nx * ny] = dense[c + nx * ny, c] = cz[b0 + c]
+    return dense
+
+
 class Hierarchy:
     """The stacked levels of one matrix (``build``); ``arrays()`` are the arguments of ``pcg``. Level
     ``l`` owns entries ``row_start[l]:row_start[l + 1]`` of the stacked ``d, cx, cy, cz``."""
@@ -142,15 +159,8 @@ class Hierarchy:
         sizes = [int(np.prod(s)) for s in shapes]
         self.row_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         self.shapes = np.asarray(shapes, np.int64)
-        last = self.row_start[-2]
-        n, (nx, ny, nz) = sizes[-1], shapes[-1]
-        dense = np.zeros((n, n))
-        for c in range(n):
-            i, j, k = c % nx, (c // nx) % ny, c // (nx * ny)
-            dense[c, c] = d[last + c]
-            for step, coupling, inside in ((1, cx, i < nx - 1), (nx, cy, j < ny - 1), (nx * ny, cz, k < nz - 1)):
-                if inside:
-                    dense[c, c + step] = dense[c + step, c] = coupling[last + c]
+        nx, ny, nz = shapes[-1]
+        dense = _dense_level(d, cx, cy, cz, int(self.row_start[-2]), nx, ny, nz)
         self._arrays = (self.row_start, self.shapes, d, cx, cy, cz, 1.0 / d, np.linalg.inv(dense))
 
     @property
