@@ -42,7 +42,8 @@ import scipy.sparse.linalg as spla
 from .mesh import GasMesh, fipy_momentum_system, fipy_pressure_system
 from ..timing import Timings
 from . import multigrid
-from .face_kernels import gauss_gradient
+from . import face_kernels
+from .face_kernels import face_pressures, gauss_gradient, predicted_fluxes
 from .krylov import bicgstab_jacobi
 from .operators import DiffusionOperator, StencilPattern, UpwindConvectionOperator
 
@@ -196,6 +197,10 @@ class GasSolver:
         self._face_second = np.ascontiguousarray(mesh.face_cells[:, 1], dtype=np.int64)
         self._face_axis_int = self._face_axis.astype(np.int64)
         self._signed_area = np.where(mesh.unused, 0.0, mesh.face_areas * self._face_sign)
+        self._face_kind = np.where(mesh.interior, face_kernels.INTERIOR, face_kernels.CLOSED).astype(np.int64)
+        self._face_kind[self._inlet] = face_kernels.INLET
+        self._face_kind[self._outlet] = face_kernels.OUTLET
+        self._face_kind[mesh.unused] = face_kernels.UNUSED
         # inlet boundary values (velocity): U / eps at the inlet face, set in step()
         self._inlet_flux = -self.inlet_velocity * mesh.face_areas[self._inlet]
         self._inlet_cells = mesh.face_cells[self._inlet, 0]
@@ -310,7 +315,14 @@ class GasSolver:
         velocity ``eps u = eps u_hat - k grad p`` that equals, per axis, the mean superficial velocity
         of its two faces (the flux-reconstructed velocity) wherever the fluxes are
         ``c_f - k_f dp / d``: exactly so in every cell when ``dt`` is large against ``rho eps / beta``,
-        up to the (small) time-step correction of the fluxes otherwise."""
+        up to the (small) time-step correction of the fluxes otherwise. Compiled
+        (``face_kernels.face_pressures``); ``_face_pressure_reference`` is the numpy form."""
+        return face_pressures(self._face_kind, self._face_first, self._face_second, self.mesh.face_areas,
+                              self.mesh.face_distances, k_cell, np.asarray(pressure, float), c_normal[0], c_normal[1],
+                              self.face_flux)
+
+    def _face_pressure_reference(self, pressure, c_normal, k_cell):
+        """``_face_pressure`` in numpy (the tests' reference)."""
         mesh = self.mesh
         out = np.zeros(mesh.face_count)
         i = self._interior
@@ -448,28 +460,7 @@ class GasSolver:
         k_cell = eps * d_cell
         u_hat = self.velocity + d_cell[:, None] * grad_p
         c = eps[:, None] * u_hat  # superficial u_hat: what is continuous across a voidage jump
-        weight, k_interior = self._face_weights(k_cell)
-        k_face = k_cell[self._boundary_cell]
-        k_face[self._interior] = k_interior
-        c_first = self._normal_component(c, self._boundary_cell)
-        c_second = np.zeros(mesh.face_count)
-        c_second[self._interior] = c[self._q, self._interior_axis] * self._interior_sign
-        c_face = self._face_interpolate_normal(c_first, c_second, weight)
-        # time-step-independent Rhie-Chow (Choi 1999; OpenFOAM's ddtCorr): on faces, the old-velocity
-        # part of u_hat, (rho / dt) D eps_old u_old, is taken from the old face flux
-        old_face, old_cell = old
-        d_face = self._face_interpolate(d_cell, weight)
-        d_old = d_cell[:, None] * old_cell
-        d_old_second = np.zeros(mesh.face_count)
-        d_old_second[self._interior] = d_old[self._q, self._interior_axis] * self._interior_sign
-        old_term = self.gas.density / dt * (d_face * old_face - self._face_interpolate_normal(
-            self._normal_component(d_old, self._boundary_cell), d_old_second, weight))
-        old_term[self._closed] = 0.0
-        old_term[self._inlet] = 0.0
-        old_term[self._outlet] = 0.0
-        flux = mesh.face_areas * (c_face - k_face * self._face_difference(self.pressure) + old_term)
-        flux[self._closed] = 0.0
-        flux[self._inlet] = self._inlet_flux
+        flux, k_face, c_first, c_second = self._predicted_fluxes(dt, d_cell, k_cell, c, old)
         imbalance = self._net_outflow(flux) + (eps - eps_old) * vol / dt
         p_corr = np.zeros(mesh.cell_count)
         if self._multigrid is not None:
@@ -500,6 +491,45 @@ class GasSolver:
         target = gradient - self._gauss_gradient(self._linear_face_pressure(corrected))
         self.gradient_correction += GRADIENT_RELAXATION * (target - self.gradient_correction)
         return np.abs(imbalance).max() / max(np.abs(self.face_flux).max(), 1e-30)
+
+    def _predicted_fluxes(self, dt, d_cell, k_cell, c, old):
+        """Rhie-Chow face fluxes before the correction, with the face coefficients and the normal
+        components of ``c = eps u_hat`` at each face's cells (compiled: ``face_kernels.predicted_fluxes``)."""
+        old_face, old_cell = old
+        d_old = d_cell[:, None] * old_cell
+        flux, k_face, c_first, c_second = predicted_fluxes(
+            self._face_kind, self._face_first, self._face_second, self._face_axis_int, self._face_sign,
+            self.mesh.face_areas, self.mesh.face_distances, k_cell, d_cell, np.ascontiguousarray(c), d_old, self.pressure,
+            np.ascontiguousarray(old_face, float), self.gas.density / dt)
+        flux[self._inlet] = self._inlet_flux
+        return flux, k_face, c_first, c_second
+
+    def _predicted_fluxes_reference(self, dt, d_cell, k_cell, c, old):
+        """``_predicted_fluxes`` in numpy, term by term (the tests' reference)."""
+        mesh = self.mesh
+        weight, k_interior = self._face_weights(k_cell)
+        k_face = k_cell[self._boundary_cell]
+        k_face[self._interior] = k_interior
+        c_first = self._normal_component(c, self._boundary_cell)
+        c_second = np.zeros(mesh.face_count)
+        c_second[self._interior] = c[self._q, self._interior_axis] * self._interior_sign
+        c_face = self._face_interpolate_normal(c_first, c_second, weight)
+        # time-step-independent Rhie-Chow (Choi 1999; OpenFOAM's ddtCorr): on faces, the old-velocity
+        # part of u_hat, (rho / dt) D eps_old u_old, is taken from the old face flux
+        old_face, old_cell = old
+        d_face = self._face_interpolate(d_cell, weight)
+        d_old = d_cell[:, None] * old_cell
+        d_old_second = np.zeros(mesh.face_count)
+        d_old_second[self._interior] = d_old[self._q, self._interior_axis] * self._interior_sign
+        old_term = self.gas.density / dt * (d_face * old_face - self._face_interpolate_normal(
+            self._normal_component(d_old, self._boundary_cell), d_old_second, weight))
+        old_term[self._closed] = 0.0
+        old_term[self._inlet] = 0.0
+        old_term[self._outlet] = 0.0
+        flux = mesh.face_areas * (c_face - k_face * self._face_difference(self.pressure) + old_term)
+        flux[self._closed] = 0.0
+        flux[self._inlet] = self._inlet_flux
+        return flux, k_face, c_first, c_second
 
     def _multigrid_correction(self, k_face, imbalance):
         """The pressure correction ``div(k_f grad p') = imbalance`` by multigrid-preconditioned CG
