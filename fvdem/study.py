@@ -688,7 +688,7 @@ def report(out) -> list:
         paths.append(plot_mixing([Path(r["folder"]) for r in runs if r["family"] == family],
                                  out / f"mixing_{family}.png"))
     if runs:
-        paths.append(plot_t95([Path(r["folder"]) for r in runs], out / "t95.png"))
+        paths.append(plot_t95([Path(r["folder"]) for r in runs], out / "t95.png", names=[r["family"] for r in runs]))
     # seed 000 Fig. 3 (AR-1 against AR-4 MP) and Fig. 9 (AR-4 MP drag only against drag + lift + torque)
     # at each velocity both families ran; Fig. 7 (void fractions below 0.3 m) of the same pairs
     for figure, (first, second) in (("fig3", ("ar1", "ar4_mp")), ("fig9", ("ar4_mp_drag", "ar4_mp"))):

@@ -71,5 +71,16 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path):
     assert table["ar1"][0][1] is None and table["ar1"][0][2] == 4.0
     assert table["ar1"][1][1] == pytest.approx(np.log(20) / 2.0, abs=0.01)
     assert table["ar4_mp"][0][1] is None
+    # a second family of the same case at the same velocity (a study's ar1 and ar1_paper), one mixed
+    # and one not: grouped by the names given, and runs at one velocity sort with None last
+    twin = tmp_path / "twin"
+    twin.mkdir()
+    (twin / "case.toml").write_text((runs[1] / "case.toml").read_text())
+    t = np.linspace(0, 4, 401)
+    (twin / "timeseries.csv").write_text("time,mixing_entropy\n" + "".join(f"{a},{0.5 * a / 4}\n" for a in t))
+    merged = mixing_times(runs + [twin])
+    assert [row[1] is None for row in merged["ar1"]] == [True, False, True]
+    by_family = mixing_times(runs + [twin], names=["ar1", "ar1", "ar4_mp", "ar1_paper"])
+    assert by_family["ar1_paper"] == [(2.9, None, 4.0)] and len(by_family["ar1"]) == 2
     assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp")]) == 0
     assert (tmp_path / "cmp" / "t95.png").exists() and (tmp_path / "cmp" / "mixing_compare.png").exists()

@@ -134,28 +134,33 @@ def plot_mixing(runs, path, level=0.95) -> Path:
     return _save(fig, Path(path))
 
 
-def mixing_times(runs, level=0.95) -> dict:
-    """``{case name: [(U/Umf, t95 or None, simulated end), ...]}`` of run folders (their case.toml and
-    timeseries.csv), sorted by U/Umf: the data of seed 000's Fig. 4."""
+def mixing_times(runs, level=0.95, names=None) -> dict:
+    """``{name: [(U/Umf, t95 or None, simulated end), ...]}`` of run folders (their case.toml and
+    timeseries.csv), sorted by U/Umf (runs at the same U/Umf, such as replicas, by t95, unmixed last):
+    the data of seed 000's Fig. 4. ``names``: the group of each run (a study's families); by default
+    its case name."""
     from ..case import load_case
     from .mixing import mixing_time
     groups = {}
-    for out in runs:
+    for k, out in enumerate(runs):
         case = load_case(Path(out) / "case.toml")
         g = case.gas
         ratio = g.u_over_umf if g.u_over_umf is not None else (g.inlet_velocity / g.umf if g.umf else g.inlet_velocity)
         ts = read_timeseries(out)
         t95 = mixing_time(ts["time"], ts["mixing_entropy"], level) if "mixing_entropy" in ts else None
-        groups.setdefault(case.name, []).append((float(ratio), t95, float(ts["time"][-1])))
-    return {name: sorted(rows) for name, rows in groups.items()}
+        name = case.name if names is None else names[k]
+        groups.setdefault(name, []).append((float(ratio), t95, float(ts["time"][-1])))
+    return {name: sorted(rows, key=lambda row: (row[0], row[1] is None, row[1] or 0.0, row[2]))
+            for name, rows in groups.items()}
 
 
-def plot_t95(runs, path, level=0.95) -> Path:
-    """Mixing time t95 against U/Umf, one line per case name (seed 000 Fig. 4). A run that has not
-    reached the level is drawn as an open triangle at its end time: t95 is later than that."""
+def plot_t95(runs, path, level=0.95, names=None) -> Path:
+    """Mixing time t95 against U/Umf, one line per case name (or per ``names``, the group of each
+    run; seed 000 Fig. 4). A run that has not reached the level is drawn as an open triangle at its
+    end time: t95 is later than that."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
-    for name, rows in mixing_times(runs, level).items():
+    for name, rows in mixing_times(runs, level, names).items():
         reached = [(r, t) for r, t, _ in rows if t is not None]
         line, = ax.plot([r for r, _ in reached], [t for _, t in reached], "o-", label=name)
         bound = [(r, end) for r, t, end in rows if t is None]
