@@ -703,7 +703,8 @@ def report(out) -> list:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
         if (not data or data.get("stopped_early")) and (Path(r["folder"]) / "timeseries.csv").exists():
-            data = {**data, **_so_far(Path(r["folder"]))}  # a run in progress: what its time series holds
+            # a run in progress: what its time series holds (the summary of an earlier stop is stale)
+            data = _so_far(Path(r["folder"]))
             r = {**r, "t95": data["t95"]}
         samples = void_fraction_samples(r["folder"]) if r["status"] != "failed" else []
         binarity = void_fraction_binarity(samples) if len(samples) else None

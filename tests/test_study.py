@@ -177,6 +177,34 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path):
     assert {"mixing_ar1.png", "mixing_ar4_mp.png", "t95.png", "table.csv", "table.json"} <= set(names)
 
 
+def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_stops_summary(tmp_path):
+    """A run stopped once early and running again: its summary.json is from the first stop; the table
+    takes t95, the pressure drop and its fluctuation from what the time series holds now."""
+    import numpy as np
+    from fvdem.study import report
+    folder = tmp_path / "runs" / "ar1_2.9"
+    folder.mkdir(parents=True)
+    (folder / "case.toml").write_text('name = "ar1"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = 2.9\n')
+    (folder / "summary.json").write_text(json.dumps({"stopped_early": True, "bed_pressure_drop_std_second_half": 5.0,
+                                                     "bed_weight_per_area": 1000.0, "bed_height": 0.2,
+                                                     "pressure_drop_over_weight": 1.03, "simulated_time": 0.07}))
+    t = np.linspace(0.0, 3.0, 31)
+    drop = 1.0 + 0.3 * np.sin(5.0 * t)
+    entropy = np.minimum(1.0, t / 2.0)
+    (folder / "timeseries.csv").write_text("time,mixing_entropy,pressure_drop_over_weight\n"
+                                           + "".join(f"{a},{b},{c}\n" for a, b, c in zip(t, entropy, drop)))
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": [
+        {"name": "ar1_2.9", "family": "ar1", "status": "stopped", "folder": str(folder), "t95": None,
+         "point": {"gas.u_over_umf": 2.9}}]}))
+    report(tmp_path)
+    row = json.loads((tmp_path / "table.json").read_text())[0]
+    half = t >= 1.5
+    assert row["simulated_seconds"] == 3.0 and row["t95"] == pytest.approx(1.9, abs=0.02)
+    assert row["pressure_drop_over_weight"] == pytest.approx(np.mean(drop[half]))
+    assert row["pressure_drop_std_over_weight"] == pytest.approx(np.std(drop[half]))
+    assert row["bed_height"] is None  # not measured while the run goes on
+
+
 def test_the_papers_findings_are_checked_from_the_t95_table():
     from fvdem.study import check_findings
 
