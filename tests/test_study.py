@@ -225,6 +225,19 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     slower = check_findings([row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 4.0)])[0]
     assert slower["verdict"] == "does not hold"
 
+    # a run not mixed by its end mixes later than one that mixed before that end (a lower bound)
+    def unmixed(family, ratio, end, entropy):
+        return dict(row(family, ratio, None), simulated_seconds=end, final_mixing_entropy=entropy)
+    bound = check_findings([unmixed("ar1", 2.0, 6.0, 0.79), dict(row("ar4_mp", 2.0, 4.1), simulated_seconds=6.0)])[0]
+    assert bound["verdict"] == "holds" and bound["values"]["2"]["ar4_mp"] == 4.1
+    against = check_findings([row("ar1", 2.0, 3.0), unmixed("ar4_mp", 2.0, 6.0, 0.9)])[0]
+    assert against["verdict"] == "does not hold"
+    late = check_findings([row("ar1", 2.0, 7.0), unmixed("ar4_mp", 2.0, 6.0, 0.9)])[0]
+    assert late["verdict"] == "open"  # mixed after the other's end: nothing follows
+    neither = check_findings([unmixed("ar1", 2.0, 6.0, 0.79), unmixed("ar4_mp", 2.0, 6.0, 0.943)])[0]
+    assert neither["verdict"] == "open"
+    assert neither["values"]["2"]["mixing_entropy_at_end"] == {"ar4_mp": [0.943], "ar1": [0.79]}
+
 
 def _square_or_fail(item, threads):
     if item < 0:
