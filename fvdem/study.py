@@ -613,25 +613,23 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     return index
 
 
-def _final_entropy(folder: Path):
-    """The last mixing entropy of a run's time series (None without one)."""
+def _series(folder: Path):
+    """A run's time series (``read_timeseries``), or None while it has none or only its header."""
     from .analysis.plots import read_timeseries
     if not (folder / "timeseries.csv").exists():
         return None
     try:
-        values = read_timeseries(folder).get("mixing_entropy")
+        series = read_timeseries(folder)
     except (IndexError, ValueError):  # a run that has written its header only
         return None
-    return float(values[-1]) if values is not None and len(values) else None
+    return series if len(series.get("time", ())) else None
 
 
-def _so_far(folder: Path) -> dict:
+def _so_far(series) -> dict:
     """A run in progress from its time series: t95 (None if not yet mixed), simulated seconds, and the
     bed pressure drop over W/A and its fluctuation over the second half of what it holds."""
     import numpy as np
     from .analysis.mixing import mixing_time
-    from .analysis.plots import read_timeseries
-    series = read_timeseries(folder)
     times = series["time"]
     out = {"simulated_time": float(times[-1]) if len(times) else 0.0,
            "t95": mixing_time(times, series["mixing_entropy"]) if "mixing_entropy" in series else None}
@@ -714,13 +712,14 @@ def report(out) -> list:
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
-        if (not data or data.get("stopped_early")) and (Path(r["folder"]) / "timeseries.csv").exists():
+        series = _series(Path(r["folder"]))
+        if (not data or data.get("stopped_early")) and series is not None:
             # a run in progress: what its time series holds (the summary of an earlier stop is stale)
-            data = _so_far(Path(r["folder"]))
+            data = _so_far(series)
             r = {**r, "t95": data["t95"]}
         samples = void_fraction_samples(r["folder"]) if r["status"] != "failed" else []
         binarity = void_fraction_binarity(samples) if len(samples) else None
-        entropy = _final_entropy(Path(r["folder"]))
+        entropy = float(series["mixing_entropy"][-1]) if series is not None and "mixing_entropy" in series else None
         rows.append({"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"],
                      "t95": r.get("t95"), "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
                      "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
@@ -788,23 +787,18 @@ def _defaults_against_paper_settings(rows) -> dict:
             "values": values, "gaps": gaps, "rule": f"t95 within {100 * SETTINGS_TOLERANCE:.0f} %"}
 
 
-def _t95(rows, family):
-    """``{U/Umf: [t95 or None, ...]}`` of the finished runs of a family (replicas listed together)."""
+def _by_velocity(rows, family, key):
+    """``{U/Umf: [row[key], ...]}`` of the runs of a family that did not fail (replicas together)."""
     out = {}
     for r in rows:
         if r["family"] == family and r["status"] != "failed" and "gas.u_over_umf" in r:
-            out.setdefault(r["gas.u_over_umf"], []).append(r["t95"])
+            out.setdefault(r["gas.u_over_umf"], []).append(r.get(key))
     return out
 
 
-def _ends(rows, family, velocity):
-    return [r.get("simulated_seconds") or 0.0 for r in rows
-            if r["family"] == family and r["status"] != "failed" and r.get("gas.u_over_umf") == velocity]
-
-
-def _entropies(rows, family, velocity):
-    return [r.get("final_mixing_entropy") for r in rows
-            if r["family"] == family and r["status"] != "failed" and r.get("gas.u_over_umf") == velocity]
+def _t95(rows, family):
+    """``{U/Umf: [t95 or None, ...]}`` of the runs of a family (replicas listed together)."""
+    return _by_velocity(rows, family, "t95")
 
 
 def _compare(rows, faster, slower, velocities, claim):
@@ -818,7 +812,8 @@ def _compare(rows, faster, slower, velocities, claim):
         if None in a[v] or None in b[v]:
             # an unmixed run's t95 lies beyond its end: a mixed run that mixed before the other's end
             # decides the comparison; otherwise show the entropy both reached
-            ends = _ends(rows, faster, v), _ends(rows, slower, v)
+            ends = [[e or 0.0 for e in _by_velocity(rows, family, "simulated_seconds")[v]]
+                    for family in (faster, slower)]
             ta = max(a[v]) if None not in a[v] else None
             tb = max(b[v]) if None not in b[v] else None
             if ta is not None and tb is None and ta < min(ends[1]):
@@ -829,8 +824,8 @@ def _compare(rows, faster, slower, velocities, claim):
                 values[f"{v:g}"] = {faster: f"> {min(ends[0]):g} (not mixed by its end)", slower: tb}
                 return {"finding": claim, "verdict": "does not hold", "values": values,
                         "rule": "a run not mixed by its end mixes later than a run mixed before that time"}
-            values[f"{v:g}"] = {"mixing_entropy_at_end": {faster: _entropies(rows, faster, v),
-                                                          slower: _entropies(rows, slower, v)},
+            values[f"{v:g}"] = {"mixing_entropy_at_end": {family: _by_velocity(rows, family, "final_mixing_entropy")[v]
+                                                          for family in (faster, slower)},
                                 "end_time": {faster: ends[0], slower: ends[1]}}
             return {"finding": claim, "verdict": "open", "why": f"not mixed by the run's end at {v:g} Umf (too short)",
                     "values": values}

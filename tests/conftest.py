@@ -1,4 +1,4 @@
-"""Shared helpers: tiny DEM scenes built directly from the library."""
+"""Shared helpers: tiny DEM scenes built directly from the library, and a drifting bed for the gas solver."""
 import numpy as np
 import pytest
 
@@ -30,3 +30,14 @@ def by_id(system, name):
 @pytest.fixture
 def system_factory():
     return make_system
+
+
+def step_drifting_bed(solver, k, dt=5e-4):
+    """One gas step under a bed-like voidage (a travelling wave around 0.5 below z = 0.15 m) and its
+    Ergun-like drag coefficient, at step ``k`` of the drift."""
+    z = solver.mesh.cell_centers[:, 2]
+    wave = 0.5 + 0.1 * np.sin(2 * np.pi * (5.0 * k * dt + 4.0 * z))
+    solver.voidage_old[:] = solver.voidage
+    solver.voidage[:] = np.where(z < 0.15, wave, 1.0)
+    solver.beta[:] = np.where(z < 0.15, 3e4 * (1 - solver.voidage) ** 2 / solver.voidage, 0.0)
+    solver.step(dt)

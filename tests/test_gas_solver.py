@@ -6,6 +6,8 @@ import pytest
 from fvdem.gas.mesh import GasMesh
 from fvdem.gas.solver import GasProperties, GasSolver
 
+from conftest import step_drifting_bed
+
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
 
@@ -187,7 +189,6 @@ def test_pressure_preconditioner_is_refactored_when_a_steps_iterations_pass_the_
 
 def test_renewal_rule_refactors_a_drifting_preconditioner_and_cuts_its_cg_iterations():
     mesh = GasMesh.box((6, 6, 24), (0.0, 0.0, 0.0), (0.09, 0.09, 0.36))
-    z = mesh.cell_centers[:, 2]
 
     def run(rule):
         solver = GasSolver(mesh, inlet_velocity=2.0, scheme="piso", linear_solver="iterative", linear_tolerance=1e-8,
@@ -196,11 +197,7 @@ def test_renewal_rule_refactors_a_drifting_preconditioner_and_cuts_its_cg_iterat
             solver._plan_refactor = lambda: None
         total = 0
         for k in range(60):
-            wave = 0.5 + 0.1 * np.sin(2 * np.pi * (5.0 * k * 5e-4 + 4.0 * z))
-            solver.voidage_old[:] = solver.voidage
-            solver.voidage[:] = np.where(z < 0.15, wave, 1.0)
-            solver.beta[:] = np.where(z < 0.15, 3e4 * (1 - solver.voidage) ** 2 / solver.voidage, 0.0)
-            solver.step(5e-4)
+            step_drifting_bed(solver, k)
             total += solver._step_iterations
         return total, solver.factorizations
 

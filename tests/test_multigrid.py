@@ -11,6 +11,8 @@ from fvdem.gas.mesh import GasMesh
 from fvdem.gas.operators import DiffusionOperator
 from fvdem.gas.solver import GasSolver
 
+from conftest import step_drifting_bed
+
 
 def pressure_operator(shape, seed=0, contrast=100.0):
     """``-div(k grad p)`` with p = 0 on the top faces and face coefficients spanning ``contrast``, as a
@@ -123,18 +125,13 @@ def test_gas_solver_gives_the_same_flow_with_either_preconditioner():
     """A drifting bed-like voidage and drag, 20 PISO steps: multigrid and factorization-preconditioned
     CG (both to 1e-10) agree to the solves' tolerance, and the multigrid run never falls back."""
     mesh = GasMesh.box((6, 6, 24), (0.0, 0.0, 0.0), (0.09, 0.09, 0.36))
-    z = mesh.cell_centers[:, 2]
     results = []
     for preconditioner in ("multigrid", "factorization"):
         solver = GasSolver(mesh, inlet_velocity=2.0, scheme="piso", linear_solver="iterative", linear_tolerance=1e-10,
                            pressure_preconditioner=preconditioner)
         assert (solver._multigrid is not None) == (preconditioner == "multigrid")
         for k in range(20):
-            wave = 0.5 + 0.1 * np.sin(2 * np.pi * (5.0 * k * 5e-4 + 4.0 * z))
-            solver.voidage_old[:] = solver.voidage
-            solver.voidage[:] = np.where(z < 0.15, wave, 1.0)
-            solver.beta[:] = np.where(z < 0.15, 3e4 * (1 - solver.voidage) ** 2 / solver.voidage, 0.0)
-            solver.step(5e-4)
+            step_drifting_bed(solver, k)
         assert solver.direct_fallbacks == 0
         results.append((solver.velocity.copy(), solver.pressure.copy(), solver.face_flux.copy()))
     (u1, p1, f1), (u2, p2, f2) = results

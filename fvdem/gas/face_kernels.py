@@ -1,8 +1,9 @@
-"""Compiled face-to-cell sums of the gas solver on its structured grid.
+"""Compiled face passes of the gas solver's pressure corrector on its structured grid: the Gauss
+gradient, the Rhie-Chow predicted fluxes and the face pressures.
 
-Every face normal of the grid is +-1 along one axis, so a face's contribution to a cell's Gauss sum
-has one component. The sparse-matrix forms (``GasSolver._divergence @ (p_f A_f n_f)``) stay in the
-solver as the reference the tests compare these kernels with.
+Every face normal of the grid is +-1 along one axis, so a face's contribution to a cell has one
+component. The numpy and sparse-matrix forms stay in the solver (``GasSolver._*_reference``) as the
+references the tests compare these kernels with.
 """
 from __future__ import annotations
 
@@ -82,7 +83,7 @@ def predicted_fluxes(kind, first, second, axis, sign, areas, distances, k_cell, 
         else:
             k_face[f] = k_cell[p]
             if kind[f] == OUTLET:
-                flux[f] = areas[f] * (cp - k_cell[p] * ((0.0 - pressure[p]) / distances[f]) + 0.0)
+                flux[f] = areas[f] * (cp + k_cell[p] * (pressure[p] / distances[f]))
     return flux, k_face, c_first, c_second
 
 

@@ -158,14 +158,9 @@ class Hierarchy:
     def __init__(self, shapes, d, cx, cy, cz):
         sizes = [int(np.prod(s)) for s in shapes]
         self.row_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-        self.shapes = np.asarray(shapes, np.int64)
         nx, ny, nz = shapes[-1]
         dense = _dense_level(d, cx, cy, cz, int(self.row_start[-2]), nx, ny, nz)
-        self._arrays = (self.row_start, self.shapes, d, cx, cy, cz, 1.0 / d, np.linalg.inv(dense))
-
-    @property
-    def sizes(self):
-        return np.diff(self.row_start)
+        self._arrays = (self.row_start, np.asarray(shapes, np.int64), d, cx, cy, cz, 1.0 / d, np.linalg.inv(dense))
 
     def arrays(self):
         return self._arrays
@@ -349,6 +344,18 @@ def pcg(row_start, shapes, d, cx, cy, cz, inverse, coarse_inverse, rhs, x, rtol,
     return 1, maxiter
 
 
+def solve_stencil(d, cx, cy, cz, shape, rhs, x, rtol, maxiter=500, over=OVER_CORRECTION):
+    """Solve the 7-point operator (diagonal ``d``, couplings ``cx, cy, cz``) on grid ``shape`` by
+    multigrid-preconditioned CG from the guess ``x`` (updated in place). Returns ``(info, iterations)``:
+    ``pcg``'s info, or 2 when a diagonal entry of any level is not positive (not a definite system:
+    nothing solved)."""
+    try:
+        hierarchy = build(d, cx, cy, cz, shape)
+    except ValueError:
+        return 2, 0
+    return pcg(*hierarchy.arrays(), np.ascontiguousarray(rhs, float), x, float(rtol), int(maxiter), float(over))
+
+
 def solve(matrix, rhs, guess, shape, rtol, maxiter=500, over=OVER_CORRECTION):
     """Solve the SPD 7-point CSR ``matrix`` on grid ``shape`` by multigrid-preconditioned CG.
 
@@ -358,9 +365,7 @@ def solve(matrix, rhs, guess, shape, rtol, maxiter=500, over=OVER_CORRECTION):
     nx, ny, nz = (int(s) for s in shape)
     ok, d, cx, cy, cz = stencil_from_csr(np.asarray(matrix.indptr, np.int64), np.asarray(matrix.indices, np.int64),
                                          np.asarray(matrix.data, float), nx, ny, nz)
-    if not ok or not np.all(d > 0.0):
+    if not ok:
         return x, 2, 0
-    hierarchy = build(d, cx, cy, cz, shape)
-    info, iterations = pcg(*hierarchy.arrays(), np.ascontiguousarray(rhs, float), x, float(rtol), int(maxiter),
-                           float(over))
+    info, iterations = solve_stencil(d, cx, cy, cz, shape, rhs, x, rtol, maxiter, over)
     return x, info, iterations

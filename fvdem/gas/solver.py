@@ -102,7 +102,6 @@ class GasSolver:
         if pressure_preconditioner not in ("multigrid", "factorization"):
             raise ValueError(f"pressure_preconditioner = {pressure_preconditioner!r}: expected 'multigrid' or "
                              "'factorization'")
-        self.pressure_preconditioner = pressure_preconditioner
         self.scheme, self.correctors = scheme, int(correctors)
         self.linear_solver, self.linear_tolerance = linear_solver, float(linear_tolerance)
         n, f = mesh.cell_count, mesh.face_count
@@ -499,8 +498,8 @@ class GasSolver:
         d_old = d_cell[:, None] * old_cell
         flux, k_face, c_first, c_second = predicted_fluxes(
             self._face_kind, self._face_first, self._face_second, self._face_axis_int, self._face_sign,
-            self.mesh.face_areas, self.mesh.face_distances, k_cell, d_cell, np.ascontiguousarray(c), d_old, self.pressure,
-            np.ascontiguousarray(old_face, float), self.gas.density / dt)
+            self.mesh.face_areas, self.mesh.face_distances, k_cell, d_cell, np.ascontiguousarray(c), d_old,
+            self.pressure, np.ascontiguousarray(old_face, float), self.gas.density / dt)
         flux[self._inlet] = self._inlet_flux
         return flux, k_face, c_first, c_second
 
@@ -541,12 +540,8 @@ class GasSolver:
                                                      outlet_cells, n)
         rhs = -np.asarray(imbalance, float)
         solution = np.zeros(n)
-        try:
-            hierarchy = multigrid.build(d, cx, cy, cz, self.mesh.shape)
-            info, iterations = multigrid.pcg(*hierarchy.arrays(), rhs, solution, self.linear_tolerance, 1000,
-                                             multigrid.OVER_CORRECTION)
-        except ValueError:  # a non-positive diagonal: not a definite system
-            info, iterations = -1, 0
+        info, iterations = multigrid.solve_stencil(d, cx, cy, cz, self.mesh.shape, rhs, solution, self.linear_tolerance,
+                                                   1000)
         self._step_iterations += iterations
         if info != 0 or not np.all(np.isfinite(solution)):
             self.direct_fallbacks += 1

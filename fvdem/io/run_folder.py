@@ -22,8 +22,7 @@ CHECKPOINT = "checkpoint.npz"
 FINAL_STATE = "final_state.npz"
 
 # keys a resumed run may change: when it ends, what it writes and how it runs; all else is its physics
-# keys a resumed run may change: none alters the physics (the pressure preconditioner changes how the
-# pressure correction reaches its tolerance, not the tolerance)
+# (the pressure preconditioner changes how the pressure correction reaches its tolerance, not the tolerance)
 RESUME_SAFE = ("name", "description", "time.end", "time.stop_when_settled", "time.settled_speed", "time.min_time",
                "output.", "run.", "gas.pressure_preconditioner")
 
