@@ -216,10 +216,10 @@ def ramp(spec, threads=None):
     plateau_hold = o.get("plateau_hold") or o["hold"]
     holds = [plateau_hold if ratio >= 1.3 else o["hold"] for ratio in ratios]
     curve = json.loads(progress_file.read_text())["curve"] if resume else []
-    if not resume:  # from the first step on: a ramp stopped or killed inside its start resumes too
-        progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
     if resume:
         print(f"{tag}: resumed at t = {sim.time:.4f} s after {len(curve)} of {len(ratios)} holds", flush=True)
+    else:  # from the first step on: a ramp stopped or killed inside its start resumes too
+        progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
     if sim.time < o["start"] - 0.5 * SAMPLE:  # the start (all of it, or its rest after a stop)
         sim.run(o["start"] - sim.time)
         _stopped(sim, tag)
