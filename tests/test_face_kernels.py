@@ -1,4 +1,5 @@
-"""The compiled Gauss sums of the gas solver against their sparse-matrix reference."""
+"""The compiled passes of the gas solver (Gauss sums, corrector faces, momentum assembly) against their
+sparse-matrix and numpy references."""
 import numpy as np
 import pytest
 
@@ -58,3 +59,39 @@ def test_face_pressures_are_the_numpy_face_pressures(periodic):
     got = solver._face_pressure(pressure, c_normal, k_cell)
     expected = solver._face_pressure_reference(pressure, c_normal, k_cell)
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-13 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("walls, periodic", [("no-slip", False), ("free-slip", False), ("no-slip", True)])
+def test_momentum_systems_are_the_cached_operator_systems(walls, periodic):
+    """The compiled assembly of the three momentum systems against the sparse scatter operators, entry
+    by entry, on random fluxes (both signs), a drag region, Dirichlet inlet values and an explicit
+    right-hand side: the Dirichlet faces (inlet, and the walls of the components they hold) are the
+    only entries that differ between components."""
+    mesh = GasMesh.box((5, 4, 6), (0.0, 0.0, 0.0), (0.05, 0.04, 0.09), periodic=(periodic,) * 3)
+    solver = GasSolver(mesh, inlet_velocity=0.0 if periodic else 1.3, walls=walls)
+    rng = np.random.default_rng(5)
+    n, nf = mesh.cell_count, mesh.face_count
+    implicit = 1.2 * rng.uniform(0.4, 1.0, n) / 5e-4 + rng.uniform(0.0, 3e4, n)
+    mass_flux = 1.2 * rng.normal(size=nf) * mesh.face_areas
+    gamma = 1.568e-5 * rng.uniform(0.4, 1.0, nf)
+    boundary = rng.normal(size=(nf, 3))
+    explicit = rng.normal(size=(n, 3)) * 1e3
+    data, rhs, diagonal = solver._momentum_tables.assemble(mesh.cell_volumes, implicit, mass_flux,
+                                                           gamma * solver._face_geometry, boundary, explicit)
+    for c in range(3):
+        a, b = solver._momentum_system(c, implicit, mass_flux, gamma, boundary[:, c])
+        a = a.toarray()
+        got = solver._stencil.matrix(data[c]).toarray()
+        np.testing.assert_allclose(got, a, rtol=0, atol=1e-12 * np.abs(a).max())
+        np.testing.assert_allclose(diagonal[:, c], np.diag(a), rtol=0, atol=1e-12 * np.abs(a).max())
+        expected = b + explicit[:, c] * mesh.cell_volumes
+        np.testing.assert_allclose(rhs[:, c], expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+    if not periodic and walls == "free-slip":  # an x wall holds u_x only: its conductance on u_x's diagonal
+        faces = mesh.boundary_faces["x-"]
+        y_walls = np.concatenate([mesh.face_cells[mesh.boundary_faces[s], 0] for s in ("y-", "y+")])
+        keep = ~np.isin(mesh.face_cells[faces, 0], y_walls)
+        faces = faces[keep]
+        position = solver._momentum_tables.diagonal[mesh.face_cells[faces, 0]]
+        np.testing.assert_allclose(data[0][position] - data[1][position], (gamma * solver._face_geometry)[faces],
+                                   rtol=1e-9)
+        np.testing.assert_array_equal(data[1][position], data[2][position])

@@ -145,3 +145,30 @@ def test_a_periodic_box_keeps_the_factorization():
     assert GasSolver(mesh, linear_solver="iterative")._multigrid is None
     with pytest.raises(ValueError, match="pressure_preconditioner"):
         GasSolver(mesh, pressure_preconditioner="amg")
+
+
+def test_a_loose_tolerance_before_the_last_corrector_keeps_the_flow_and_continuity():
+    """OpenFOAM's p / pFinal split (``corrector_tolerance``): the first PISO corrector's pressure solve
+    stops at the default 1e-3, the last at ``linear_tolerance``. On a hard drifting bed (CFD step 5e-4 s,
+    drag 3e4), 20 steps: continuity (with the voidage change) holds to round-off after every step, the
+    multigrid needs a quarter fewer CG iterations, and the flow moves by under a fifth of what PISO's own
+    splitting error is (the change a third corrector makes; measured 0.3 % against 4.6 % of the
+    largest velocity; a 1e-2 tolerance moved it by 2.5 %, half the splitting error)."""
+    mesh = GasMesh.box((6, 6, 24), (0.0, 0.0, 0.0), (0.09, 0.09, 0.36))
+    results = {}
+    for name, tolerance, correctors in (("tight", None, 2), ("loose", 1e-3, 2), ("three", None, 3)):
+        solver = GasSolver(mesh, inlet_velocity=2.0, scheme="piso", linear_solver="iterative", linear_tolerance=1e-10,
+                           corrector_tolerance=tolerance, correctors=correctors)
+        iterations = 0
+        for k in range(20):
+            step_drifting_bed(solver, k)
+            iterations += solver._step_iterations
+            imbalance = (solver._net_outflow(solver.face_flux)
+                         + (solver.voidage - solver.voidage_old) * mesh.cell_volumes / 5e-4)
+            assert np.abs(imbalance).max() <= 1e-9 * np.abs(solver.face_flux).max()
+        results[name] = (solver.velocity.copy(), iterations)
+    tight, tight_iterations = results["tight"]
+    moved = np.abs(results["loose"][0] - tight).max()
+    splitting = np.abs(results["three"][0] - tight).max()
+    assert 0.0 < moved < 0.2 * splitting
+    assert results["loose"][1] < 0.8 * tight_iterations

@@ -32,7 +32,8 @@ class GasPhase:
                                 inlet_velocity=g.inlet_velocity, walls=g.walls, scheme=g.scheme,
                                 correctors=g.correctors, linear_solver=g.linear_solver,
                                 linear_tolerance=g.linear_tolerance, tolerance=g.simple_tolerance,
-                                pressure_preconditioner=g.pressure_preconditioner)
+                                pressure_preconditioner=g.pressure_preconditioner,
+                                corrector_tolerance=g.corrector_tolerance)
         self.dt = g.cfd_step
         self.step_count = 0
         zone = g.porous_zone

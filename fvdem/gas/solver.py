@@ -45,6 +45,7 @@ from . import multigrid
 from . import face_kernels
 from .face_kernels import face_pressures, gauss_gradient, predicted_fluxes
 from .krylov import bicgstab_jacobi
+from .momentum_kernels import MomentumTables
 from .operators import DiffusionOperator, StencilPattern, UpwindConvectionOperator
 
 
@@ -82,7 +83,7 @@ class GasSolver:
                  relax_pressure: float = 0.3, tolerance: float = 1e-8, max_iterations: int = 200,
                  assembly: str = "cached", scheme: str = "simple", correctors: int = 2,
                  linear_solver: str = "direct", linear_tolerance: float = 1e-10,
-                 pressure_preconditioner: str = "multigrid"):
+                 pressure_preconditioner: str = "multigrid", corrector_tolerance: float | None = None):
         self.timings = Timings()  # momentum and pressure phases (a Model shares one)
         self.mesh = mesh
         self.gas = gas
@@ -104,6 +105,11 @@ class GasSolver:
                              "'factorization'")
         self.scheme, self.correctors = scheme, int(correctors)
         self.linear_solver, self.linear_tolerance = linear_solver, float(linear_tolerance)
+        # relative tolerance of the pressure solves of every PISO corrector but the last (OpenFOAM's
+        # ``p`` relTol against ``pFinal``): the next corrector starts from their error, so only the
+        # last one needs ``linear_tolerance``; None: every corrector at ``linear_tolerance``
+        self.corrector_tolerance = None if corrector_tolerance is None else float(corrector_tolerance)
+        self._pressure_tolerance = self.linear_tolerance  # of the correction being solved
         n, f = mesh.cell_count, mesh.face_count
         self.periodic = all(mesh.periodic)
         self.velocity = np.zeros((n, 3))
@@ -153,6 +159,11 @@ class GasSolver:
         self._viscous = [DiffusionOperator(mesh, faces, self._stencil) for faces in self._velocity_dirichlet]
         self._convection = UpwindConvectionOperator(mesh, inflow_faces=self._inlet, outflow_faces=self._outlet,
                                                     pattern=self._stencil)
+        # the compiled assembly of the three momentum systems on the same pattern (the operators above
+        # are its reference, and the assembly of the 'direct' checks)
+        self._momentum_tables = MomentumTables.build(mesh, self._stencil, self._inlet, self._outlet,
+                                                     self._velocity_dirichlet)
+        self._face_geometry = mesh.face_areas / mesh.face_distances
         self._pressure_laplacian = DiffusionOperator(mesh, self._outlet)
         self._interior = np.nonzero(mesh.interior)[0]
         self._p = mesh.face_cells[self._interior, 0]
@@ -366,14 +377,24 @@ class GasSolver:
     def _solve(self, matrix, rhs, guess, symmetric_negative=False):
         """Linear solve: direct (``linear_solver='direct'``) or warm-started Krylov: compiled BiCGStab
         with a Jacobi preconditioner for momentum (``krylov.bicgstab_jacobi``), CG preconditioned by a recent factorization for the
-        negative-definite pressure Laplacian."""
+        negative-definite pressure Laplacian. ``matrix``: a sparse matrix, or the data array of one on
+        the shared stencil pattern (the compiled momentum assembly's)."""
+        if isinstance(matrix, np.ndarray):
+            if self.linear_solver == "iterative":
+                solution = np.array(guess, dtype=float)
+                info, _ = bicgstab_jacobi(self._stencil.indptr, self._stencil.indices, matrix,
+                                          np.ascontiguousarray(rhs, float), solution, self.linear_tolerance, 1000)
+                if info == 0 and np.all(np.isfinite(solution)):
+                    return solution
+                self.direct_fallbacks += 1  # Krylov stalled (e.g. a convection-dominated step): solve directly
+            return spla.spsolve(self._stencil.matrix(matrix).tocsc(), rhs)
         if self.linear_solver == "direct":
             return spla.spsolve(matrix.tocsc(), rhs)
         if symmetric_negative:
             matrix, rhs = -matrix, -rhs
             preconditioner = self._pressure_preconditioner(matrix)
             count = [0]
-            solution, info = spla.cg(matrix, rhs, x0=guess, rtol=self.linear_tolerance, atol=0.0,
+            solution, info = spla.cg(matrix, rhs, x0=guess, rtol=self._pressure_tolerance, atol=0.0,
                                      M=preconditioner, maxiter=1000, callback=lambda x: count.__setitem__(0, count[0] + 1))
             self._step_iterations += count[0]
             if count[0] > 25:  # the stored factorization has drifted too far from the current matrix
@@ -431,15 +452,27 @@ class GasSolver:
         eps, eps_old, vol = self.voidage, self.voidage_old, self.mesh.cell_volumes
         implicit = rho * eps / dt + self.beta
         grad_p = self._gauss_gradient(self._linear_face_pressure(self.pressure)) + self.gradient_correction
+        # explicit right-hand side per unit volume: old momentum, exchange source, gravity, pressure
+        explicit = (rho * eps_old / dt)[:, None] * u_old + self.source + rho * eps[:, None] * self.gravity
+        explicit -= eps[:, None] * grad_p
+        fipy = self.assembly == "fipy"
+        if not fipy:  # one compiled pass for the three systems (fvdem/gas/momentum_kernels.py)
+            data, rhs, diagonal = self._momentum_tables.assemble(
+                vol, np.ascontiguousarray(np.broadcast_to(implicit, vol.shape)), rho * self.face_flux,
+                gamma * self._face_geometry, inlet_value, explicit)
         diagonals = []
         for c in range(3):
-            a, b = self._momentum_system(c, implicit, rho * self.face_flux, gamma, inlet_value[:, c])
-            b = b + (rho * eps_old / dt * u_old[:, c] + self.source[:, c] + rho * eps * self.gravity[c]) * vol
-            b = b - eps * vol * grad_p[:, c]
-            diag_c = a.diagonal()
+            if fipy:
+                a, b = self._momentum_system(c, implicit, rho * self.face_flux, gamma, inlet_value[:, c])
+                b, diag_c = b + explicit[:, c] * vol, a.diagonal()
+            else:  # the matrix as its data array on the shared stencil pattern
+                a, b, diag_c = data[c], rhs[:, c], diagonal[:, c]
             if relax < 1.0:
                 extra = diag_c / relax - diag_c
-                a = a + sp.diags(extra)
+                if fipy:
+                    a = a + sp.diags(extra)
+                else:
+                    a[self._momentum_tables.diagonal] += extra
                 b = b + extra * self.velocity[:, c]
                 diag_c = diag_c + extra
             self.velocity[:, c] = self._solve(a, b, self.velocity[:, c])
@@ -532,7 +565,7 @@ class GasSolver:
 
     def _multigrid_correction(self, k_face, imbalance):
         """The pressure correction ``div(k_f grad p') = imbalance`` by multigrid-preconditioned CG
-        (``fvdem.gas.multigrid``; no sparse matrix is assembled), from zero to ``linear_tolerance``; a
+        (``fvdem.gas.multigrid``; no sparse matrix is assembled), from zero to the corrector's tolerance (``linear_tolerance``, or ``corrector_tolerance`` before the last PISO corrector); a
         solve that fails falls back to a direct one (counted in ``direct_fallbacks``)."""
         faces, low, high, axis, outlet, outlet_cells = self._multigrid
         n = self.mesh.cell_count
@@ -540,8 +573,8 @@ class GasSolver:
                                                      outlet_cells, n)
         rhs = -np.asarray(imbalance, float)
         solution = np.zeros(n)
-        info, iterations = multigrid.solve_stencil(d, cx, cy, cz, self.mesh.shape, rhs, solution, self.linear_tolerance,
-                                                   1000)
+        info, iterations = multigrid.solve_stencil(d, cx, cy, cz, self.mesh.shape, rhs, solution,
+                                                   self._pressure_tolerance, 1000)
         self._step_iterations += iterations
         if info != 0 or not np.all(np.isfinite(solution)):
             self.direct_fallbacks += 1
@@ -584,9 +617,13 @@ class GasSolver:
             a_p, grad_p = self._predict_momentum(dt, u_old, gamma, inlet_value, 1.0)
             t1 = perf_counter()
             residuals = []
-            for _ in range(self.correctors):
+            for corrector in range(self.correctors):
+                final = corrector == self.correctors - 1
+                self._pressure_tolerance = (self.linear_tolerance if final or self.corrector_tolerance is None
+                                            else max(self.corrector_tolerance, self.linear_tolerance))
                 residuals.append(self._correct_pressure(dt, a_p, grad_p, 1.0, old))
                 grad_p = self._face_gradient
+            self._pressure_tolerance = self.linear_tolerance
             self._plan_refactor()
             self.timings.add("gas_momentum", t1 - t0)
             self.timings.add("gas_pressure", perf_counter() - t1)

@@ -22,9 +22,11 @@ CHECKPOINT = "checkpoint.npz"
 FINAL_STATE = "final_state.npz"
 
 # keys a resumed run may change: when it ends, what it writes and how it runs; all else is its physics
-# (the pressure preconditioner changes how the pressure correction reaches its tolerance, not the tolerance)
+# (the pressure preconditioner changes how the pressure correction reaches its tolerance, not the tolerance;
+# the corrector tolerance moves only the intermediate PISO correctors, the fields by ~1e-8 relative, while the
+# last corrector keeps linear_tolerance)
 RESUME_SAFE = ("name", "description", "time.end", "time.stop_when_settled", "time.settled_speed", "time.min_time",
-               "output.", "run.", "gas.pressure_preconditioner")
+               "output.", "run.", "gas.pressure_preconditioner", "gas.corrector_tolerance")
 
 
 @dataclass
@@ -99,8 +101,8 @@ def check_resumable(case: Case, out: Path) -> None:
     if changed:
         listed = "; ".join(f"{k}: {before.get(k, '(unset)')!r} -> {now.get(k, '(unset)')!r}" for k in changed)
         raise OutputError(f"--resume: the case differs from the one {out} was started with in {listed}. A resumed run "
-                          "continues the same physics; change only time.end, output.*, run.* or "
-                          "gas.pressure_preconditioner, or start a new run folder")
+                          "continues the same physics; change only time.end, output.*, run.*, "
+                          "gas.pressure_preconditioner or gas.corrector_tolerance, or start a new run folder")
 
 
 def _flatten(table, prefix=""):
