@@ -9,14 +9,22 @@ from conftest import by_id, make_system
 
 
 @pytest.mark.parametrize("skin", [None, 7.5e-3])
-def test_half_list_is_complete_and_unique_against_brute_force(skin):
-    """Also with a skin wide enough that rows overflow the one-pass build's first row capacity."""
+@pytest.mark.parametrize("span", [None, 1, 3])
+def test_half_list_is_complete_and_unique_against_brute_force(skin, span):
+    """Also with a skin wide enough that rows overflow the one-pass build's first row capacity, and
+    with cells of a whole reach (span 1), of a half (the rods' default) and of a third, searched
+    1, 2 or 3 cells either way, across two periodic axes."""
     rng = np.random.default_rng(7)
     n = 400
     r, h = 1.5e-3, 4.5e-3
     box = Box((0.0, 0.0, 0.0), (0.06, 0.05, 0.07), (True, False, True))
     pos = rng.uniform([0, 0.003, 0], [0.06, 0.047, 0.07], size=(n, 3))
     s = make_system(pos, r, h, axis=rng.normal(size=(n, 3)), box=box, skin=skin)
+    assert s.cell_span == 2  # rods: half-reach cells
+    if span is not None:
+        s.cell_span = span
+        s._cell_grid()
+        s.rebuild()
     p = s.particles
     if skin is not None:
         assert np.diff(s.row_start).max() > 16  # the buffer was widened and the build redone

@@ -82,7 +82,7 @@ def _pair_within(i, j, position, axis, radius, half_length, box_length, periodic
 
 @njit(cache=True, parallel=True)
 def build_half_list(position, axis, radius, half_length, box_lo, box_length, periodic, cell_size,
-                    n_cells, cell_of, start, skin, buffer, counts):
+                    n_cells, cell_of, start, skin, span, buffer, counts):
     """The half list in one pass: row i's partners j > i go to ``buffer[i, :]`` (a fixed
     capacity per row) in cell-scan order and ``counts[i]`` gets the row's length, which may exceed
     the capacity: the caller then enlarges ``buffer`` and calls again (``compact_rows`` copies the
@@ -102,25 +102,36 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
         cy = (c // nx) % ny
         cz = c // (nx * ny)
         count = 0
-        for oz in range(-1, 2):
+        width = 2 * span + 1
+        for oz in range(-span, span + 1):
             kz = cz + oz
             if kz < 0 or kz >= nz:
-                if not periodic[2] or nz < 3:
+                if not periodic[2] or nz < width:
                     continue
                 kz %= nz
-            for oy in range(-1, 2):
+            for oy in range(-span, span + 1):
                 ky = cy + oy
                 if ky < 0 or ky >= ny:
-                    if not periodic[1] or ny < 3:
+                    if not periodic[1] or ny < width:
                         continue
                     ky %= ny
-                for ox in range(-1, 2):
+                row = (kz * ny + ky) * nx
+                if not periodic[0]:  # the row's three cells are contiguous in the sorted order: one range
+                    first = row + max(cx - span, 0)
+                    last = row + min(cx + span, nx - 1)
+                    for j in range(max(start[first], i + 1), start[last + 1]):
+                        if _pair_within(i, j, position, axis, radius, half_length, box_length, periodic, skin):
+                            if count < capacity:
+                                buffer[i, count] = j
+                            count += 1
+                    continue
+                for ox in range(-span, span + 1):
                     kx = cx + ox
                     if kx < 0 or kx >= nx:
-                        if not periodic[0] or nx < 3:
+                        if nx < width:
                             continue
                         kx %= nx
-                    cell = (kz * ny + ky) * nx + kx
+                    cell = row + kx
                     for j in range(max(start[cell], i + 1), start[cell + 1]):
                         if _pair_within(i, j, position, axis, radius, half_length, box_length, periodic, skin):
                             if count < capacity:
