@@ -356,7 +356,9 @@ class GasSolver:
     def _momentum_system(self, component, implicit_cell, mass_flux, gamma_face, boundary_value):
         """Matrix and boundary right-hand side of one velocity component's momentum equation:
         ``diag(implicit V) + div(mass_flux u) - div(gamma grad u)`` with the component's Dirichlet
-        faces (inlet, walls) and the outlet's outflow."""
+        faces (inlet, walls) and the outlet's outflow. The solver's steps assemble the cached path in
+        one compiled pass (``MomentumTables.assemble``); this sparse-operator form is its tested
+        reference, and the FiPy form the reference of both."""
         if self.assembly == "fipy":
             return fipy_momentum_system(self.mesh, implicit_cell, mass_flux, gamma_face, boundary_value,
                                         self._velocity_dirichlet[component], self._outlet)
