@@ -179,7 +179,7 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path):
 
 def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_stops_summary(tmp_path):
     """A run stopped once early and running again: its summary.json is from the first stop; the table
-    takes t95, the pressure drop and its fluctuation from what the time series holds now."""
+    takes t95, the pressure drop and its fluctuation and the bed height from what the time series holds now."""
     import numpy as np
     from fvdem.study import report
     folder = tmp_path / "runs" / "ar1_2.9"
@@ -191,8 +191,9 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     t = np.linspace(0.0, 3.0, 31)
     drop = 1.0 + 0.3 * np.sin(5.0 * t)
     entropy = np.minimum(1.0, t / 2.0)
-    (folder / "timeseries.csv").write_text("time,mixing_entropy,pressure_drop_over_weight\n"
-                                           + "".join(f"{a},{b},{c}\n" for a, b, c in zip(t, entropy, drop)))
+    top = 0.3 + 0.05 * np.sin(3.0 * t)
+    (folder / "timeseries.csv").write_text("time,mixing_entropy,pressure_drop_over_weight,bed_top\n"
+                                           + "".join(f"{a},{b},{c},{d}\n" for a, b, c, d in zip(t, entropy, drop, top)))
     (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": [
         {"name": "ar1_2.9", "family": "ar1", "status": "stopped", "folder": str(folder), "t95": None,
          "point": {"gas.u_over_umf": 2.9}}]}))
@@ -202,7 +203,9 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     assert row["simulated_seconds"] == 3.0 and row["t95"] == pytest.approx(1.9, abs=0.02)
     assert row["pressure_drop_over_weight"] == pytest.approx(np.mean(drop[half]))
     assert row["pressure_drop_std_over_weight"] == pytest.approx(np.std(drop[half]))
-    assert row["bed_height"] is None  # not measured while the run goes on
+    # the bed's surface over the second half (the summary's packed-bed height of 0.2 m is not a
+    # fluidized bed's height)
+    assert row["bed_height"] == pytest.approx(np.mean(top[half]))
 
 
 def test_the_papers_findings_are_checked_from_the_t95_table():
