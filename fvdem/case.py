@@ -224,8 +224,8 @@ class GasConfig:
                                           "last (OpenFOAM's p relTol against pFinal; the last corrector solves to "
                                           "linear_tolerance, so continuity holds to it). 1e-3 cut the pressure CG "
                                           "iterations by 30 % and moved the flow by 6 % of PISO's own splitting error "
-                                          "(the change a third corrector makes; docs/benchmarks.md); set it to linear_tolerance for every corrector "
-                                          "at that tolerance")
+                                          "(the change a third corrector makes; docs/benchmarks.md); set it to "
+                                          "linear_tolerance for every corrector at that tolerance")
     pressure_preconditioner: str = spec("multigrid", kind="str", choices=("multigrid", "factorization"),
                                         doc="preconditioner of the pressure correction's CG (iterative solves): "
                                             "'multigrid' (aggregation multigrid built from each step's matrix; walled "

@@ -644,9 +644,10 @@ def _bed_surface(series):
     """The bed's height [m] as the table gives it: the mean over the second half of the time series of
     ``bed_top`` (the height below which 99 % of the particle tops lie), None without it. The summary's
     ``bed_height`` is a packed bed's (solid volume over area and core solids fraction): in a fluidized
-    bed it exceeds the column (1.37 m in the 1.05 m column for AR-1 at 2.9 Umf)."""
+    bed it exceeds the column (1.37 m in the 1.05 m column for AR-1 at 2.9 Umf). ``series``: ``_series``'s
+    (None, or at least one row)."""
     import numpy as np
-    if series is None or "bed_top" not in series or not len(series["time"]):
+    if series is None or "bed_top" not in series:
         return None
     times = series["time"]
     return float(np.mean(series["bed_top"][times >= 0.5 * times[-1]]))

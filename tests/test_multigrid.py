@@ -115,7 +115,7 @@ def test_stencil_from_faces_is_the_negated_diffusion_operator():
     mesh, k_face, matrix = pressure_operator(shape, seed=8)
     solver = GasSolver(mesh, inlet_velocity=1.0, scheme="piso", linear_solver="iterative")
     faces, low, high, axis, outlet, outlet_cells = solver._multigrid
-    from_faces = multigrid.stencil_from_faces(k_face, solver._face_conductance, faces, low, high, axis, outlet,
+    from_faces = multigrid.stencil_from_faces(k_face, solver._face_geometry, faces, low, high, axis, outlet,
                                               outlet_cells, mesh.cell_count)
     for got, expected in zip(from_faces, stencil(matrix, shape)):
         np.testing.assert_allclose(got, expected, rtol=1e-14, atol=1e-14 * np.abs(expected).max())

@@ -96,13 +96,14 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
     n = position.shape[0]
     capacity = buffer.shape[1]
     nx, ny, nz = n_cells[0], n_cells[1], n_cells[2]
+    width = 2 * span + 1
+    wrapped = periodic[0] and nx >= width  # a periodic x axis wraps each row of cells around
     for i in prange(n):
         c = cell_of[i]
         cx = c % nx
         cy = (c // nx) % ny
         cz = c // (nx * ny)
         count = 0
-        width = 2 * span + 1
         for oz in range(-span, span + 1):
             kz = cz + oz
             if kz < 0 or kz >= nz:
@@ -116,23 +117,15 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
                         continue
                     ky %= ny
                 row = (kz * ny + ky) * nx
-                if not periodic[0]:  # the row's three cells are contiguous in the sorted order: one range
-                    first = row + max(cx - span, 0)
-                    last = row + min(cx + span, nx - 1)
+                # the row's cells: one range of the sorted particles (they are contiguous), or one
+                # cell at a time where the row wraps around
+                for k in range(width if wrapped else 1):
+                    if wrapped:
+                        first = last = row + (cx - span + k) % nx
+                    else:
+                        first = row + max(cx - span, 0)
+                        last = row + min(cx + span, nx - 1)
                     for j in range(max(start[first], i + 1), start[last + 1]):
-                        if _pair_within(i, j, position, axis, radius, half_length, box_length, periodic, skin):
-                            if count < capacity:
-                                buffer[i, count] = j
-                            count += 1
-                    continue
-                for ox in range(-span, span + 1):
-                    kx = cx + ox
-                    if kx < 0 or kx >= nx:
-                        if nx < width:
-                            continue
-                        kx %= nx
-                    cell = row + kx
-                    for j in range(max(start[cell], i + 1), start[cell + 1]):
                         if _pair_within(i, j, position, axis, radius, half_length, box_length, periodic, skin):
                             if count < capacity:
                                 buffer[i, count] = j

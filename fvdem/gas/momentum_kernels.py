@@ -55,8 +55,8 @@ class MomentumTables:
         cells = np.arange(mesh.cell_count)
         diagonal = pattern.positions(cells, cells)
         faces = [as_int(f) for f in dirichlet_faces_per_component]
-        dirichlet = np.concatenate(faces) if faces else np.zeros(0, np.int64)
-        component = np.concatenate([np.full(len(f), c) for c, f in enumerate(faces)]) if faces else dirichlet
+        dirichlet = np.concatenate(faces)
+        component = np.concatenate([np.full(len(f), c) for c, f in enumerate(faces)])
         dirichlet_cell = mesh.face_cells[dirichlet, 0]
         return cls(as_int(interior), as_int(pattern.positions(p, p)), as_int(pattern.positions(p, q)),
                    as_int(pattern.positions(q, q)), as_int(pattern.positions(q, p)), outflow,

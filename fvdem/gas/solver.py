@@ -109,7 +109,6 @@ class GasSolver:
         # ``p`` relTol against ``pFinal``): the next corrector starts from their error, so only the
         # last one needs ``linear_tolerance``; None: every corrector at ``linear_tolerance``
         self.corrector_tolerance = None if corrector_tolerance is None else float(corrector_tolerance)
-        self._pressure_tolerance = self.linear_tolerance  # of the correction being solved
         n, f = mesh.cell_count, mesh.face_count
         self.periodic = all(mesh.periodic)
         self.velocity = np.zeros((n, 3))
@@ -228,7 +227,6 @@ class GasSolver:
                 self._multigrid = (self._interior.astype(np.int64), low.astype(np.int64), high.astype(np.int64),
                                    self._interior_axis.astype(np.int64), self._outlet.astype(np.int64),
                                    mesh.face_cells[self._outlet, 0].astype(np.int64))
-                self._face_conductance = mesh.face_areas / mesh.face_distances
 
     # ------------------------------------------------------------------ helpers
     def set_inlet_velocity(self, velocity: float) -> None:
@@ -376,38 +374,37 @@ class GasSolver:
             return fipy_pressure_system(self.mesh, gamma_face, self._outlet)
         return self._pressure_laplacian.matrix(gamma_face)
 
-    def _solve(self, matrix, rhs, guess, symmetric_negative=False):
+    def _solve(self, matrix, rhs, guess, symmetric_negative=False, tolerance=None):
         """Linear solve: direct (``linear_solver='direct'``) or warm-started Krylov: compiled BiCGStab
         with a Jacobi preconditioner for momentum (``krylov.bicgstab_jacobi``), CG preconditioned by a recent factorization for the
-        negative-definite pressure Laplacian. ``matrix``: a sparse matrix, or the data array of one on
-        the shared stencil pattern (the compiled momentum assembly's)."""
-        if isinstance(matrix, np.ndarray):
-            if self.linear_solver == "iterative":
-                solution = np.array(guess, dtype=float)
-                info, _ = bicgstab_jacobi(self._stencil.indptr, self._stencil.indices, matrix,
-                                          np.ascontiguousarray(rhs, float), solution, self.linear_tolerance, 1000)
-                if info == 0 and np.all(np.isfinite(solution)):
-                    return solution
-                self.direct_fallbacks += 1  # Krylov stalled (e.g. a convection-dominated step): solve directly
-            return spla.spsolve(self._stencil.matrix(matrix).tocsc(), rhs)
+        negative-definite pressure Laplacian, to the relative ``tolerance`` (default ``linear_tolerance``).
+        ``matrix``: a sparse matrix, or the data array of one on the shared stencil pattern (the
+        compiled momentum assembly's)."""
+        stencil_data = isinstance(matrix, np.ndarray)
         if self.linear_solver == "direct":
-            return spla.spsolve(matrix.tocsc(), rhs)
+            return spla.spsolve((self._stencil.matrix(matrix) if stencil_data else matrix).tocsc(), rhs)
+        tolerance = self.linear_tolerance if tolerance is None else tolerance
         if symmetric_negative:
             matrix, rhs = -matrix, -rhs
             preconditioner = self._pressure_preconditioner(matrix)
             count = [0]
-            solution, info = spla.cg(matrix, rhs, x0=guess, rtol=self._pressure_tolerance, atol=0.0,
+            solution, info = spla.cg(matrix, rhs, x0=guess, rtol=tolerance, atol=0.0,
                                      M=preconditioner, maxiter=1000, callback=lambda x: count.__setitem__(0, count[0] + 1))
             self._step_iterations += count[0]
             if count[0] > 25:  # the stored factorization has drifted too far from the current matrix
                 self._pressure_lu = None
-        else:  # compiled Jacobi-BiCGStab (fvdem/gas/krylov.py)
-            matrix = sp.csr_matrix(matrix)
+        else:  # compiled Jacobi-BiCGStab (fvdem/gas/krylov.py), on the CSR arrays without building a matrix
+            if stencil_data:
+                indptr, indices, data = self._stencil.indptr, self._stencil.indices, matrix
+            else:
+                matrix = sp.csr_matrix(matrix)
+                indptr, indices, data = matrix.indptr, matrix.indices, matrix.data
             solution = np.array(guess, dtype=float)
-            info, _ = bicgstab_jacobi(matrix.indptr, matrix.indices, matrix.data, np.ascontiguousarray(rhs, float),
-                                      solution, self.linear_tolerance, 1000)
+            info, _ = bicgstab_jacobi(indptr, indices, data, np.ascontiguousarray(rhs, float), solution, tolerance, 1000)
         if info != 0 or not np.all(np.isfinite(solution)):
             self.direct_fallbacks += 1  # Krylov stalled (e.g. a convection-dominated step): solve directly
+            if stencil_data:
+                matrix = self._stencil.matrix(matrix)
             return spla.spsolve(matrix.tocsc(), rhs)  # the same (possibly sign-flipped) system
         return solution
 
@@ -460,7 +457,7 @@ class GasSolver:
         fipy = self.assembly == "fipy"
         if not fipy:  # one compiled pass for the three systems (fvdem/gas/momentum_kernels.py)
             data, rhs, diagonal = self._momentum_tables.assemble(
-                vol, np.ascontiguousarray(np.broadcast_to(implicit, vol.shape)), rho * self.face_flux,
+                vol, implicit, rho * self.face_flux,
                 gamma * self._face_geometry, inlet_value, explicit)
         diagonals = []
         for c in range(3):
@@ -481,13 +478,14 @@ class GasSolver:
             diagonals.append(diag_c)
         return np.mean(diagonals, axis=0), grad_p
 
-    def _correct_pressure(self, dt, a_p, grad_p, relax, old):
+    def _correct_pressure(self, dt, a_p, grad_p, relax, old, tolerance=None):
         """Drag-aware Rhie-Chow fluxes from the current velocity and pressure, then one pressure
         correction: the corrected fluxes satisfy continuity (with the voidage change) to solver
         tolerance, and the cell velocity is recovered with the gradient of the face pressures that
         match them (``_face_pressure``). ``old`` holds the old face superficial velocities and old cell
-        superficial velocities of the time-step correction. Returns the continuity residual before
-        the correction (relative to the largest flux)."""
+        superficial velocities of the time-step correction; ``tolerance`` the pressure solve's relative
+        tolerance (default ``linear_tolerance``). Returns the continuity residual before the correction
+        (relative to the largest flux)."""
         mesh = self.mesh
         eps, eps_old, vol = self.voidage, self.voidage_old, mesh.cell_volumes
         d_cell = eps * vol / a_p
@@ -496,14 +494,17 @@ class GasSolver:
         c = eps[:, None] * u_hat  # superficial u_hat: what is continuous across a voidage jump
         flux, k_face, c_first, c_second = self._predicted_fluxes(dt, d_cell, k_cell, c, old)
         imbalance = self._net_outflow(flux) + (eps - eps_old) * vol / dt
+        tolerance = self.linear_tolerance if tolerance is None else tolerance
         p_corr = np.zeros(mesh.cell_count)
         if self._multigrid is not None:
-            p_corr = self._multigrid_correction(k_face, imbalance)
+            p_corr = self._multigrid_correction(k_face, imbalance, tolerance)
         elif self.periodic:  # pressure fixed up to a constant: pin cell 0
             laplacian = self._pressure_system(k_face).tocsr()
-            p_corr[1:] = self._solve(laplacian[1:, 1:], imbalance[1:], p_corr[1:], symmetric_negative=True)
+            p_corr[1:] = self._solve(laplacian[1:, 1:], imbalance[1:], p_corr[1:], symmetric_negative=True,
+                                     tolerance=tolerance)
         else:
-            p_corr = self._solve(self._pressure_system(k_face).tocsr(), imbalance, p_corr, symmetric_negative=True)
+            p_corr = self._solve(self._pressure_system(k_face).tocsr(), imbalance, p_corr, symmetric_negative=True,
+                                 tolerance=tolerance)
         flux_corr = -k_face * mesh.face_areas * self._face_difference(p_corr)
         flux_corr[self._closed] = 0.0
         flux_corr[self._inlet] = 0.0
@@ -565,18 +566,17 @@ class GasSolver:
         flux[self._inlet] = self._inlet_flux
         return flux, k_face, c_first, c_second
 
-    def _multigrid_correction(self, k_face, imbalance):
+    def _multigrid_correction(self, k_face, imbalance, tolerance):
         """The pressure correction ``div(k_f grad p') = imbalance`` by multigrid-preconditioned CG
-        (``fvdem.gas.multigrid``; no sparse matrix is assembled), from zero to the corrector's tolerance (``linear_tolerance``, or ``corrector_tolerance`` before the last PISO corrector); a
-        solve that fails falls back to a direct one (counted in ``direct_fallbacks``)."""
+        (``fvdem.gas.multigrid``; no sparse matrix is assembled), from zero to the relative
+        ``tolerance``; a solve that fails falls back to a direct one (counted in ``direct_fallbacks``)."""
         faces, low, high, axis, outlet, outlet_cells = self._multigrid
         n = self.mesh.cell_count
-        d, cx, cy, cz = multigrid.stencil_from_faces(k_face, self._face_conductance, faces, low, high, axis, outlet,
+        d, cx, cy, cz = multigrid.stencil_from_faces(k_face, self._face_geometry, faces, low, high, axis, outlet,
                                                      outlet_cells, n)
         rhs = -np.asarray(imbalance, float)
         solution = np.zeros(n)
-        info, iterations = multigrid.solve_stencil(d, cx, cy, cz, self.mesh.shape, rhs, solution,
-                                                   self._pressure_tolerance, 1000)
+        info, iterations = multigrid.solve_stencil(d, cx, cy, cz, self.mesh.shape, rhs, solution, tolerance, 1000)
         self._step_iterations += iterations
         if info != 0 or not np.all(np.isfinite(solution)):
             self.direct_fallbacks += 1
@@ -621,11 +621,10 @@ class GasSolver:
             residuals = []
             for corrector in range(self.correctors):
                 final = corrector == self.correctors - 1
-                self._pressure_tolerance = (self.linear_tolerance if final or self.corrector_tolerance is None
-                                            else max(self.corrector_tolerance, self.linear_tolerance))
-                residuals.append(self._correct_pressure(dt, a_p, grad_p, 1.0, old))
+                tolerance = (self.linear_tolerance if final or self.corrector_tolerance is None
+                             else max(self.corrector_tolerance, self.linear_tolerance))
+                residuals.append(self._correct_pressure(dt, a_p, grad_p, 1.0, old, tolerance))
                 grad_p = self._face_gradient
-            self._pressure_tolerance = self.linear_tolerance
             self._plan_refactor()
             self.timings.add("gas_momentum", t1 - t0)
             self.timings.add("gas_pressure", perf_counter() - t1)
