@@ -40,7 +40,7 @@ SKIN_RANGE = (0.1, 1.0)
 # two either way: (2 x 2 + 1)^3 half-reach cells cover 15.6 reach^3 against 27 for 3^3 reach-wide cells.
 # On the settled 32,500-rod bed (13 rods per reach-wide cell; one thread, same process, alternating) a
 # rebuild cost 1,940-1,980 ns per rod against 2,100-2,400, the contact forces unchanged (540-566 ns
-# against 548-564); spheres (1.4 per cell) gained nothing measurable
+# against 548-564); spheres (1.4 per cell) gained nothing measurable from smaller cells
 ELONGATED_EXTENT = 1.5
 
 
