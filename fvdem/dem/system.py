@@ -4,7 +4,8 @@ them with the numba kernels. One step (velocity Verlet):
 1. ``kick_drift``: half kick with the forces of the previous step, drift, orientation update;
 2. rebuild the neighbour list (cell sort + history transfer) if some particle moved > skin/2;
    the skin is fixed or adapted at each rebuild (``adapt_skin``);
-3. ``pair_forces`` then ``gather_forces``: contact forces and torques, walls included;
+3. ``contact_forces``: contact forces and torques of every listed pair and wall, both sides of a pair
+   added straight onto the particles (race-free by blocks of cell layers);
 4. ``kick``: second half kick.
 
 External (e.g. hydrodynamic) forces in ``particles.external_force/torque`` are held over the step;
@@ -21,10 +22,10 @@ import numpy as np
 from ..timing import Timings
 
 from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
-from .forces import gather_forces, pair_forces, sphere_pair_forces
+from .forces import contact_forces
 from .integrate import kick, kick_drift
-from .neighbours import (build_half_list, build_partner_slots, cell_indices, cell_starts, compact_rows,
-                         row_offsets, transfer_history, wrap_periodic)
+from .neighbours import (build_half_list, cell_indices, cell_starts, compact_rows, contact_blocks, row_offsets,
+                         transfer_history, wrap_periodic)
 from .particles import ParticleArrays
 
 
@@ -42,6 +43,10 @@ SKIN_RANGE = (0.1, 1.0)
 # rebuild cost 1,940-1,980 ns per rod against 2,100-2,400, the contact forces unchanged (540-566 ns
 # against 548-564); spheres (1.4 per cell) gained nothing measurable from smaller cells
 ELONGATED_EXTENT = 1.5
+# the contact kernel's rows are cut into about this many blocks of cell layers (fewer when the bed has
+# fewer layers): even blocks run in parallel, then odd ones, so each phase needs several blocks per
+# thread to balance; the cut, and so the summation order, does not depend on the thread count
+CONTACT_BLOCKS = 64
 
 
 def adapted_skin(skin: float, interval: int, lower: float, upper: float) -> float:
@@ -157,8 +162,6 @@ class DEMSystem:
         self.row_start = np.zeros(n + 1, np.int64)  # CSR half list: row i is neighbours[row_start[i]:row_start[i+1]]
         self.neighbours = np.zeros(0, np.int32)
         self.history = np.zeros((0, HISTORY_COLUMNS))
-        self._partner_start = np.zeros(n + 1, np.int64)
-        self._owner_sum = np.zeros((n, 6))
         self._row_max_overlap = np.zeros(n)
         self._row_contacts = np.zeros(n, np.int64)
         self._row_wall_contacts = np.zeros(n, np.int64)
@@ -215,21 +218,12 @@ class DEMSystem:
 
     def compute_forces(self) -> None:
         p = self.particles
-        if self.track_orientation:
-            pair_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius, p.half_length, p.mass,
-                        p.inertia, self.row_start, self.neighbours, self.history, self._partner_slot,
-                        self._owner_sum, self._partner_result, self._row_max_overlap, self._row_contacts,
-                        self._box_len, self._periodic, self.params, self._uniform)
-        else:  # spheres only
-            sphere_pair_forces(p.position, p.velocity, p.angular_velocity, p.radius, p.mass, p.inertia,
-                               self.row_start, self.neighbours, self.history, self._partner_slot, self._owner_sum,
-                               self._partner_result, self._row_max_overlap, self._row_contacts, self._box_len,
-                               self._periodic, self.params, self._uniform)
-        gather_forces(p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
-                      p.half_length, p.mass, p.inertia, self._owner_sum, self._partner_result,
-                      self._partner_start, self._walls,
-                      self._box_lo, self._box_hi, self.wall_history, self.wall_mask, self.params, p.contact_force,
-                      p.contact_torque, self._row_max_overlap, self._row_wall_contacts)
+        block_start, deferred, deferred_rows = self._blocks
+        contact_forces(not self.track_orientation, p.position, p.velocity, p.angular_velocity, p.axis, p.radius,
+                       p.half_length, p.mass, p.inertia, self.row_start, self.neighbours, self.history, block_start,
+                       deferred, deferred_rows, self._walls, self._box_lo, self._box_hi, self.wall_history,
+                       self.wall_mask, self._box_len, self._periodic, self.params, self._uniform, p.contact_force,
+                       p.contact_torque, self._row_max_overlap, self._row_contacts, self._row_wall_contacts)
 
     # ------------------------------------------------------------------ neighbour list
 
@@ -266,7 +260,8 @@ class DEMSystem:
         start = cell_starts(self._cell_of, total_cells)
         counts = np.zeros(n, np.int64)
         args = (p.position, p.axis, p.radius, p.half_length, self._box_lo, self._box_len, self._periodic,
-                self._cell_size, self._n_cells, self._cell_of, start, self.skin, self.cell_span)
+                self._cell_size, self._n_cells, self._cell_of, start, self.skin, self.cell_span,
+                not self.track_orientation)
         if self._row_buffer.shape[0] != n:
             self._row_buffer = np.empty((n, self._row_buffer.shape[1]), np.int32)
         build_half_list(*args, self._row_buffer, counts)
@@ -280,16 +275,21 @@ class DEMSystem:
         history = np.empty((len(neighbours), HISTORY_COLUMNS))
         transfer_history(self.row_start, self.neighbours, self.history, row_start, neighbours, history, order)
         self.row_start, self.neighbours, self.history = row_start, neighbours, history
-        self._index_partners()
+        self._cut_blocks()
         self.reference_position[:] = p.position
         self.reference_axis[:] = p.axis
         self.rebuild_count += 1
 
-    def _index_partners(self) -> None:
-        """Reserve partner-result slots for the current list; all partner results start at zero."""
-        self._partner_slot = np.empty(len(self.neighbours), np.int32)
-        build_partner_slots(self.row_start, self.neighbours, self._partner_start, self._partner_slot)
-        self._partner_result = np.zeros((len(self.neighbours), 6))
+    def _restore_cells(self) -> None:
+        """The particles' cells at the last rebuild (restored lists): from the positions the list was
+        built at, on the grid of the restored skin, as ``rebuild`` computed them."""
+        self._cell_of = np.empty(self.particles.count, np.int64)
+        cell_indices(self.reference_position, self._box_lo, self._cell_size, self._n_cells, self._cell_of)
+
+    def _cut_blocks(self) -> None:
+        """The contact kernel's race-free blocks of the current list (``neighbours.contact_blocks``)."""
+        self._blocks = contact_blocks(self.row_start, self.neighbours, self._cell_of,
+                                      int(self._n_cells[0] * self._n_cells[1]), self.cell_span, CONTACT_BLOCKS)
 
     # ------------------------------------------------------------------ diagnostics
     def diagnostics(self) -> dict:
@@ -357,7 +357,8 @@ class DEMSystem:
         if "dem.skin" in data:
             self.skin = float(data["dem.skin"][0])
             self._cell_grid()
-        self._index_partners()
+        self._restore_cells()
+        self._cut_blocks()
         self.compute_forces_diagnostics_only()
 
     def compute_forces_diagnostics_only(self) -> None:
