@@ -277,3 +277,51 @@ def test_oblique_pair_impact_restitution_and_coulomb_limit(tangential_speed):
     assert impulse_t <= mu * impulse_n * (1 + 1e-9)
     np.testing.assert_allclose(v.sum(axis=0), 0.0, atol=1e-14)
     assert np.abs(angular_momentum() - initial).max() <= 1e-12 * np.abs(initial).max()
+
+
+def _rotated_history_reference(h, n):
+    """The stored tangential displacement projected on the plane normal to ``n`` and rescaled to its
+    length (the textbook form, one square root)."""
+    projected = h - np.dot(h, n) * n
+    return projected * np.linalg.norm(h) / np.linalg.norm(projected)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 1e-9, 1e-6, 3e-3, 9e-3, 1.1e-2, 0.1, 0.7])
+def test_the_history_rotation_keeps_its_length_on_both_branches(tilt):
+    """The history turned into the new tangent plane, from a normal that turned a little (a packed
+    contact) to a lot, equals the textbook projection and rescaling to 1e-15."""
+    from fvdem.dem.contact_law import tangential_force
+    rng = np.random.default_rng(int(tilt * 1e9) % 1000)
+    for _ in range(20):
+        n = rng.normal(size=3)
+        n /= np.linalg.norm(n)
+        in_plane = np.cross(n, rng.normal(size=3))
+        in_plane *= 1e-5 / np.linalg.norm(in_plane)
+        h = in_plane + tilt * 1e-5 * n  # a history tilted out of the plane by about ``tilt``
+        history = np.zeros((1, 4))
+        history[0, :3] = h
+        # no velocity, no force limit hit: the history stays the rotated one
+        tangential_force(history, 0, n[0], n[1], n[2], 0.0, 0.0, 0.0, 1.0, 800.0, 1 / 800.0, 0.0, 1.0, 1e-5)
+        expected = _rotated_history_reference(h, n)
+        assert np.abs(history[0, :3] - expected).max() <= 1e-15 * np.linalg.norm(h)
+        assert abs(np.dot(history[0, :3], n)) <= 1e-15 * np.linalg.norm(h)
+
+
+@pytest.mark.parametrize("speed", [0.0, 1e-6, 1e-3, 1.0, 100.0])
+def test_rolling_torque_on_both_sides_of_its_cap(speed):
+    """``-min(mu_r R* F_n / |w_r|, I* / dt) w_r`` with ``w_r`` the rolling part of ``w``, on both
+    sides of the cap (a slow roll is stopped within the step, a fast one gets mu_r R* F_n)."""
+    from fvdem.dem.contact_law import rolling_torque
+    n = np.array([0.0, 0.6, 0.8])
+    w = np.array([speed, 0.3 * speed, 2.0 * speed])
+    w_roll = w - np.dot(w, n) * n
+    mu_r, r_eff, f_n, inertia, inv_dt = 0.46, 1.3e-3, 0.2, 2e-10, 1e5
+    torque = np.array(rolling_torque(n[0], n[1], n[2], w[0], w[1], w[2], f_n, mu_r, r_eff, inertia, inv_dt))
+    if speed == 0.0:
+        np.testing.assert_array_equal(torque, 0.0)
+        return
+    norm = np.linalg.norm(w_roll)
+    expected = -min(mu_r * r_eff * f_n / norm, inertia * inv_dt) * w_roll
+    np.testing.assert_allclose(torque, expected, rtol=1e-14, atol=0.0)
+    capped = mu_r * r_eff * f_n / norm > inertia * inv_dt
+    assert capped == (speed < 10.0)  # the cases cover both branches (the cap at |w_r| = 6 rad/s)
