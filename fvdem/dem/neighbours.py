@@ -17,6 +17,7 @@ the particles without write conflicts.
 """
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -52,6 +53,19 @@ def cell_indices(position, box_lo, cell_size, n_cells, cell_of):
         cell_of[i] = index
 
 
+@njit(cache=True, parallel=True)
+def permute_wall_history(history, mask, order, new_history):
+    """Wall histories (``(N * 12, 4)``, 12 slots per particle) in the particles' new order: only the
+    particles with a wall contact (``mask`` bits set, old order) are copied, into ``new_history``
+    zeroed beforehand (a zeroed array's untouched pages cost nothing)."""
+    for k in prange(order.shape[0]):
+        o = order[k]
+        if mask[o] != 0:
+            for s in range(12):
+                for c in range(history.shape[1]):
+                    new_history[k * 12 + s, c] = history[o * 12 + s, c]
+
+
 @njit(cache=True)
 def cell_starts(cell_of_sorted, total_cells):
     """Start offsets (total_cells + 1) of each cell in the sorted particle order."""
@@ -64,12 +78,9 @@ def cell_starts(cell_of_sorted, total_cells):
 
 
 @njit(cache=True, inline="always")
-def _pair_within(rx, ry, rz, ri, hi, ai0, ai1, ai2, j, axis, radius, half_length, skin):
+def _segments_within(rx, ry, rz, ri, hi, ai0, ai1, ai2, j, axis, radius, half_length, skin):
     """Whether the axis segments of i (separation ``r = x_i - x_j``, radius, half length, axis given)
-    and j come closer than ``r_i + r_j + skin``: the bounding spheres first, then the segments."""
-    reach = ri + hi + radius[j] + half_length[j] + skin
-    if rx * rx + ry * ry + rz * rz >= reach * reach:
-        return False
+    and j come closer than ``r_i + r_j + skin``."""
     s, t = segment_parameters(rx, ry, rz, ai0, ai1, ai2, hi, axis[j, 0], axis[j, 1], axis[j, 2], half_length[j])
     dx = rx + s * ai0 - t * axis[j, 0]
     dy = ry + s * ai1 - t * axis[j, 1]
@@ -80,14 +91,18 @@ def _pair_within(rx, ry, rz, ri, hi, ai0, ai1, ai2, j, axis, radius, half_length
 
 @njit(cache=True, parallel=True)
 def build_half_list(position, axis, radius, half_length, box_lo, box_length, periodic, cell_size,
-                    n_cells, cell_of, start, skin, span, spheres, buffer, counts):
+                    n_cells, cell_of, start, skin, span, spheres, buffer, counts, scratch):
     """The half list in one pass: row i's partners j > i go to ``buffer[i, :]`` (a fixed
     capacity per row) in cell-scan order and ``counts[i]`` gets the row's length, which may exceed
     the capacity: the caller then enlarges ``buffer`` and calls again (``compact_rows`` copies the
     rows into the CSR list). One pass instead of a counting pass and a filling pass: each
     candidate pair is tested once. ``spheres``: every particle is a sphere, so a pair is listed when
     its centres are closer than ``r_i + r_j + skin`` (no segment geometry: a rebuild of the settled
-    32,500-sphere bed 180-240 ns per particle against 230-290).
+    32,500-sphere bed 180-240 ns per particle against 230-290). Otherwise the candidates within the
+    bounding spheres' reach are first collected without a branch into the calling thread's row of
+    ``scratch`` (at least one more column than a particle has candidates), then given the segment
+    test: the list of a fluidized 32,500-rod bed (skin 3 mm, about 130 candidates, 37 within reach and
+    9.5 listed per rod) 9-10 % cheaper, the same list.
 
     Scans the ``(2 span + 1)^3`` cells around each particle's cell (wrapped on periodic axes, which
     need at least ``2 span + 1`` cells so no cell is visited twice). Particles are sorted by cell, so
@@ -109,7 +124,10 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
         px, py, pz = position[i, 0], position[i, 1], position[i, 2]
         ri, hi = radius[i], half_length[i]
         ai0, ai1, ai2 = axis[i, 0], axis[i, 1], axis[i, 2]
+        outer = ri + hi + skin
+        thread = numba.get_thread_id()
         count = 0
+        candidates = 0  # within the bounding spheres' reach, in scratch[thread, :candidates]
         for oz in range(-span, span + 1):
             kz = cz + oz
             if kz < 0 or kz >= nz:
@@ -137,13 +155,23 @@ def build_half_list(position, axis, radius, half_length, box_lo, box_length, per
                         rz = minimum_image(pz - position[j, 2], lz, qz)
                         if spheres:
                             cut = ri + radius[j] + skin
-                            if rx * rx + ry * ry + rz * rz >= cut * cut:
-                                continue
-                        elif not _pair_within(rx, ry, rz, ri, hi, ai0, ai1, ai2, j, axis, radius, half_length, skin):
-                            continue
-                        if count < capacity:
-                            buffer[i, count] = j
-                        count += 1
+                            if rx * rx + ry * ry + rz * rz < cut * cut:
+                                if count < capacity:
+                                    buffer[i, count] = j
+                                count += 1
+                        else:  # kept (the slot not overwritten) when within reach: no branch
+                            reach = outer + radius[j] + half_length[j]
+                            scratch[thread, candidates] = j
+                            candidates += rx * rx + ry * ry + rz * rz < reach * reach
+        for k in range(candidates):
+            j = scratch[thread, k]
+            rx = minimum_image(px - position[j, 0], lx, qx)
+            ry = minimum_image(py - position[j, 1], ly, qy)
+            rz = minimum_image(pz - position[j, 2], lz, qz)
+            if _segments_within(rx, ry, rz, ri, hi, ai0, ai1, ai2, j, axis, radius, half_length, skin):
+                if count < capacity:
+                    buffer[i, count] = j
+                count += 1
         counts[i] = count
 
 

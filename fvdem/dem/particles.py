@@ -12,8 +12,18 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
+from numba import njit, prange
 
 FLOAT = np.float64
+
+
+@njit(cache=True, parallel=True)
+def gather_rows(source, order, destination):
+    """``destination[k] = source[order[k]]`` row by row (2-D arrays of one dtype)."""
+    for k in prange(order.shape[0]):
+        o = order[k]
+        for c in range(source.shape[1]):
+            destination[k, c] = source[o, c]
 
 
 def spherocylinder_volume(radius, half_length):
@@ -156,9 +166,23 @@ class ParticleArrays:
         )
 
     def permute(self, order: np.ndarray) -> None:
-        """Reorder every array in place so that new row k holds old row ``order[k]``."""
+        """Reorder every array so that new row k holds old row ``order[k]``.
+
+        The rows are gathered into the arrays the previous permutation left behind (double buffering),
+        not into new ones: a fresh array costs its page faults on the first write, which made a
+        permutation of the 32,500-particle arrays 5-7x slower than the gather itself. Every field
+        therefore holds a new array object after a call, and an array taken from a field before the
+        previous call is overwritten by this one (hold fields by attribute, not by array)."""
+        spares = self.__dict__.setdefault("_spares", {})
+        n = len(order)
         for f in fields(self):
-            setattr(self, f.name, np.ascontiguousarray(getattr(self, f.name)[order]))
+            source = getattr(self, f.name)
+            destination = spares.get(f.name)
+            if destination is None or destination.shape != source.shape or destination.dtype != source.dtype:
+                destination = np.empty(source.shape, source.dtype)
+            gather_rows(np.ascontiguousarray(source).reshape(n, -1), order, destination.reshape(n, -1))
+            spares[f.name] = source
+            setattr(self, f.name, destination)
 
     def as_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in fields(self)}

@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from time import perf_counter
 
+import numba
 import numpy as np
 
 from ..timing import Timings
@@ -24,8 +25,8 @@ from ..timing import Timings
 from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
 from .forces import contact_forces
 from .integrate import kick, kick_drift
-from .neighbours import (build_half_list, cell_indices, cell_starts, compact_rows, contact_blocks, row_offsets,
-                         transfer_history, wrap_periodic)
+from .neighbours import (build_half_list, cell_indices, cell_starts, compact_rows, contact_blocks,
+                         permute_wall_history, row_offsets, transfer_history, wrap_periodic)
 from .particles import ParticleArrays
 
 
@@ -166,6 +167,7 @@ class DEMSystem:
         self._row_contacts = np.zeros(n, np.int64)
         self._row_wall_contacts = np.zeros(n, np.int64)
         self._row_buffer = np.empty((n, 16), np.int32)  # one-pass list rows; widened when a row overflows
+        self._scratch = np.empty((numba.config.NUMBA_NUM_THREADS, 0), np.int32)  # the list's candidates
         self.rebuild()
         self.compute_forces()
 
@@ -253,22 +255,28 @@ class DEMSystem:
         order = np.argsort(self._cell_of, kind="stable")
         if np.any(order != np.arange(n)):
             p.permute(order)
-            self.wall_history = np.ascontiguousarray(self.wall_history.reshape(n, 12, HISTORY_COLUMNS)[order].reshape(n * 12, HISTORY_COLUMNS))
+            wall_history = np.zeros_like(self.wall_history)
+            permute_wall_history(self.wall_history, self.wall_mask, order, wall_history)
+            self.wall_history = wall_history
             self._cell_of = self._cell_of[order]
             self.wall_mask = np.ascontiguousarray(self.wall_mask[order])
         total_cells = int(np.prod(self._n_cells))
         start = cell_starts(self._cell_of, total_cells)
         counts = np.zeros(n, np.int64)
+        # the list's per-thread scratch: one more column than a particle can have candidates
+        candidates = (2 * self.cell_span + 1) ** 3 * int(np.diff(start).max(initial=0)) + 1
+        if self._scratch.shape[1] < candidates:
+            self._scratch = np.empty((numba.config.NUMBA_NUM_THREADS, candidates + candidates // 2), np.int32)
         args = (p.position, p.axis, p.radius, p.half_length, self._box_lo, self._box_len, self._periodic,
                 self._cell_size, self._n_cells, self._cell_of, start, self.skin, self.cell_span,
                 not self.track_orientation)
         if self._row_buffer.shape[0] != n:
             self._row_buffer = np.empty((n, self._row_buffer.shape[1]), np.int32)
-        build_half_list(*args, self._row_buffer, counts)
+        build_half_list(*args, self._row_buffer, counts, self._scratch)
         longest = int(counts.max()) if n else 0
         if longest > self._row_buffer.shape[1]:  # a row overflowed: widen the buffer (with room) and redo
             self._row_buffer = np.empty((n, longest + longest // 2 + 1), np.int32)
-            build_half_list(*args, self._row_buffer, counts)
+            build_half_list(*args, self._row_buffer, counts, self._scratch)
         row_start = row_offsets(counts)
         neighbours = np.empty(row_start[-1], np.int32)
         compact_rows(self._row_buffer, counts, row_start, neighbours)
