@@ -39,6 +39,30 @@ def test_a_slugging_dip_above_umf_is_not_taken_for_the_fixed_branch():
     assert umf < exact  # the lower plateau is met earlier; umf_at_weight in the tool's output uses W/A
 
 
+def test_holds_whose_bed_touched_the_roof_are_left_out_of_the_plateau():
+    """A bed pressed against the roof has the roof carry part of it: its pressure drop (here 1.9 W/A at
+    2 Umf_exp) is not the fluidized bed's. Flagged, it is left out; all flagged, all are kept."""
+    a, b, weight = 150.0, 400.0, 1600.0
+    velocity, drop = _ramp(a, b, weight, 1.58, dips=[(0, 1.9 * weight)])
+    roof = [True] + [False] * (len(velocity) - 1)
+    plateau, umf, _ = tool.fit_umf(velocity, drop, weight, 1.58, roof)
+    assert plateau == pytest.approx(weight)
+    assert umf == pytest.approx((-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b), rel=1e-9)
+    assert tool.fit_umf(velocity, drop, weight, 1.58)[0] > 1.2 * weight  # unflagged, it moves the plateau
+    everywhere = [True] * len(velocity)
+    assert tool.fit_umf(velocity, drop, weight, 1.58, everywhere)[0] == tool.fit_umf(velocity, drop, weight, 1.58)[0]
+
+
+@pytest.mark.parametrize("width, particles, column", [(0.06, 2000, 0.51), (0.15, 32500, 1.05), (0.09, 4500, 0.51)])
+def test_the_column_leaves_the_bed_room_to_rise(width, particles, column):
+    """The column is at least twice the height the particles are inserted to (and 0.3 m above it): the
+    paper's bed gets the paper's own 1.05 m column, the small beds keep theirs."""
+    table = tool.reduced_bed_table("sphere", "mp", particles, 1, width)
+    assert table["domain"]["upper"][2] == pytest.approx(column)
+    height = table["particles"]["insertion"]["upper"][2]
+    assert column >= 2.0 * height - 1e-9 and column >= height + 0.3 - 1e-9
+
+
 def test_fixed_branch_coefficients_are_non_negative():
     velocity = np.array([3.0, 2.0, 1.0, 0.8, 0.6, 0.4])
     drop = np.array([1000.0, 1000.0, 700.0, 600.0, 480.0, 330.0])  # concave: an unconstrained b < 0

@@ -6,7 +6,9 @@ then the gas velocity is stepped down to about 0.4 Umf; each velocity is held an
 drop averaged over the second half of the hold. Umf is where the fixed-bed branch (least-squares
 ``dP = a U + b U^2``, Ergun's form with a, b >= 0, through the lowest velocities up to the first
 point at 0.85 W/A) meets the fluidized plateau
-(the mean of the points at and above 1.3 x the experimental Umf); ``umf_at_weight`` meets W/A itself.
+(the mean of the points at and above 1.3 x the experimental Umf, less those whose bed touched the roof,
+``touched_roof``); ``umf_at_weight`` meets W/A itself. The inlet rises linearly from 0 over the start
+(``--start``): a full-speed start lifts a packed bed as one plug.
 Umf is a property of particles and gas, so a shallower bed than the paper's may be used: the output
 says which bed was used (``--width 0.15 --particles 32500`` is the paper's own bed).
 
@@ -65,12 +67,14 @@ def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings=
     """Case table of the reduced bed (also tools/speed_accuracy.py's): seed 000's particles (AR-1, or AR-4
     with SP or MP closures) in a ``width`` square column of 15 mm cells at 2 Umf,experiment, inserted
     below 0.2 m (higher when more particles than 2,000 per 0.06 x 0.06 m need the room); the column is
-    0.45 m tall, or the insertion height + 0.3 m for deeper beds. ``drag`` other than ``"paper"`` (a
+    0.45 m tall, or the insertion height + 0.3 m, or twice the insertion height, whichever is tallest
+    (the paper's bed: its own 1.05 m column; at 0.82 m the bed rose to the roof at 2 Umf,exp and stayed
+    pinned there, a plateau of 1.2-2.0 W/A). ``drag`` other than ``"paper"`` (a
     registered name, e.g. ``"gidaspow"`` or ``"tenneti"``) replaces the paper's drag closure, keeping
     lift and torque."""
     cells = max(1, round(width / 0.015))
     height = 0.2 * max(1.0, (0.06 / width) ** 2 * particles / 2000)
-    column = max(0.45, 0.015 * np.ceil((height + 0.3) / 0.015))
+    column = max(0.45, 0.015 * np.ceil((height + 0.3) / 0.015 - 1e-9), 0.015 * np.ceil(2.0 * height / 0.015 - 1e-9))
     p = {"shape": shape, "count": particles, "density": 1442.0, "colour": "single",
          "insertion": {"upper": [width, width, height], "seed": 7}}
     coupling = {"drag": "hoelzer-sommerfeld"}
@@ -117,9 +121,14 @@ def branch_crossing(a, b, level):
     return float(level / a if abs(b) < 1e-12 else (-a + np.sqrt(a * a + 4 * b * level)) / (2 * b))
 
 
-def fit_umf(velocity, drop, weight, umf_experiment):
+def fit_umf(velocity, drop, weight, umf_experiment, touched_roof=None):
+    """``(plateau, Umf, (a, b))``: the plateau is the mean of the holds at and above 1.3 Umf,exp, less
+    those where the bed touched the roof (``touched_roof``, a flag per hold; all of them when every
+    fluidized hold did); Umf is where the fixed-bed branch ``a U + b U^2`` meets it."""
     velocity, drop = np.asarray(velocity), np.asarray(drop)
     fluidized = velocity >= 1.3 * umf_experiment
+    if touched_roof is not None and (fluidized & ~np.asarray(touched_roof, bool)).any():
+        fluidized &= ~np.asarray(touched_roof, bool)
     plateau = float(drop[fluidized].mean())
     # the fixed-bed branch: the lowest velocities up to the first point at 0.85 W/A (a slugging bed's
     # short-hold average can dip below that at high velocity; it is not part of the branch)
@@ -144,28 +153,35 @@ SAMPLE = 5e-4  # s between pressure-drop samples of a hold (the ramp's time seri
 
 def hold_statistics(folder, end_time, hold):
     """Mean and standard deviation of the bed pressure drop [Pa] over the second half of the hold that
-    ended at ``end_time`` [s], from the ramp's time series (samples every ``SAMPLE`` s)."""
+    ended at ``end_time`` [s], from the ramp's time series (samples every ``SAMPLE`` s), and the highest
+    bed top [m] (99 % of the particle tops below it) over the same samples."""
     from fvdem.analysis.plots import read_timeseries
     series = read_timeseries(folder)
     t = series["time"]
     steps = int(round(hold / SAMPLE))
     first = end_time - hold + (steps // 2 + 1) * SAMPLE
-    values = series["bed_pressure_drop"][(t >= first - 0.25 * SAMPLE) & (t <= end_time + 0.25 * SAMPLE)]
-    return float(np.mean(values)), float(np.std(values))
+    window = (t >= first - 0.25 * SAMPLE) & (t <= end_time + 0.25 * SAMPLE)
+    values = series["bed_pressure_drop"][window]
+    return float(np.mean(values)), float(np.std(values)), float(np.max(series["bed_top"][window]))
 
 
 def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
     """One point of the curve: the hold's pressure drop and, for the bed as it is at the end of the
     hold, the uniform bed of its core packing and equivalent height under the closure at this velocity
-    (the CFD-DEM's own error, hold by hold)."""
-    drop, spread = hold_statistics(folder, sim.time, hold)
+    (the CFD-DEM's own error, hold by hold). ``touched_roof``: the bed top came within a particle
+    diameter of the roof during the averaged half of the hold (the roof then carries part of the bed,
+    and the pressure drop is not the fluidized bed's)."""
+    drop, spread, top = hold_statistics(folder, sim.time, hold)
+    roof = float(sim.case.domain.upper[2])
+    size = 2.0 * float((sim.particles.radius + sim.particles.half_length).max())
     hold_packing = packed_state(sim)
     solid_height = solid_volume / area
     uniform = uniform_bed_pressure_gradient(sim.bridge.model, 1.0 - hold_packing["solids_fraction"], u,
                                             hold_packing["axes"]) * solid_height / hold_packing["solids_fraction"]
     return {"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
             "over_weight": drop / weight, "packed_solids_fraction": hold_packing["solids_fraction"],
-            "closure_uniform_bed_over_weight": uniform / weight, "end_time": sim.time}
+            "closure_uniform_bed_over_weight": uniform / weight, "end_time": sim.time,
+            "bed_top_max": top, "touched_roof": bool(top >= roof - size)}
 
 
 class RampStopped(RuntimeError):
@@ -198,6 +214,8 @@ def ramp(spec, threads=None):
                               o["drag"])
     # checkpoints every 0.05 s and where run() ends (a stop); samples every SAMPLE s; no snapshots
     table["output"].update(timeseries_interval=SAMPLE, checkpoint_interval=0.05, vtk=False)
+    # the inlet rises linearly over the start: a full-speed start lifts the packed bed as one plug
+    table["gas"]["inlet_ramp"] = o["start"]
     case = case_from_dict(table)
     folder = Path(o["out"]) / f"ramp_{tag}"
     progress_file = folder / "ramp.json"
@@ -241,11 +259,13 @@ def ramp(spec, threads=None):
         c = curve[-1]
         print(f"{tag}: U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {c['pressure_drop']:.1f} Pa = "
               f"{c['over_weight']:.3f} W/A (+- {c['pressure_drop_std']:.1f}); core solids "
-              f"{c['packed_solids_fraction']:.4f}, a uniform bed of it {c['closure_uniform_bed_over_weight']:.3f} W/A",
+              f"{c['packed_solids_fraction']:.4f}, a uniform bed of it {c['closure_uniform_bed_over_weight']:.3f} W/A"
+              + ("; the bed touched the roof (left out of the plateau)" if c["touched_roof"] else ""),
               flush=True)
     velocity = [c["velocity"] for c in curve]
     drop = [c["pressure_drop"] for c in curve]
-    plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp)
+    roofed = [bool(c.get("touched_roof", False)) for c in curve]
+    plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp, roofed)
     # the fixed-bed branch against W/A itself rather than the measured plateau
     umf_at_weight = None if umf is None else branch_crossing(a, b, weight)
     p = case.particles
@@ -276,7 +296,9 @@ def ramp(spec, threads=None):
                f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
                "property of particles and gas)",
         "settings": o["settings"],
-        "hold_seconds": o["hold"], "plateau_hold_seconds": plateau_hold, "curve": curve, "plot": str(png), "defluidized_state": str(state),
+        "hold_seconds": o["hold"], "plateau_hold_seconds": plateau_hold,
+        "column_height": float(case.domain.upper[2]), "inlet_ramp_seconds": o["start"],
+        "plateau_holds_touching_roof": sum(r for r, c in zip(roofed, curve) if c["velocity"] >= 1.3 * umf_exp), "curve": curve, "plot": str(png), "defluidized_state": str(state),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
     }
 
