@@ -147,3 +147,39 @@ def test_adaptive_skin_and_its_last_rebuild_survive_a_checkpoint():
         sys_.step(100)
     np.testing.assert_array_equal(by_id(t, "position"), by_id(s, "position"))
     assert t.rebuild_count == s.rebuild_count
+
+
+def test_permutations_gather_every_array_and_reuse_the_arrays_left_behind():
+    """``ParticleArrays.permute`` gives each field the rows ``old[order]`` (every dtype and shape), twice
+    in a row, gathering the second time into the arrays the first left behind."""
+    from fvdem.dem.particles import ParticleArrays
+    rng = np.random.default_rng(3)
+    n = 50
+    p = ParticleArrays.create(rng.uniform(size=(n, 3)), rng.uniform(1e-3, 2e-3, n), 0.0, 1000.0,
+                              colour=rng.integers(0, 2, n), velocity=rng.normal(size=(n, 3)))
+    p.ids[:] = rng.permutation(n)
+    fields = {k: v.copy() for k, v in p.as_dict().items()}
+    first, second = rng.permutation(n), rng.permutation(n)
+    p.permute(first)
+    after_first = {k: id(v) for k, v in p.as_dict().items()}
+    p.permute(second)
+    for name, old in fields.items():
+        new = p.as_dict()[name]
+        assert new.dtype == old.dtype and new.shape == old.shape, name
+        np.testing.assert_array_equal(new, old[first][second], err_msg=name)
+        assert id(new) not in after_first.values()  # the arrays of the first call were not written over
+    p.permute(first)  # the third call reuses the first call's arrays
+    assert {id(v) for v in p.as_dict().values()} == set(after_first.values())
+
+
+def test_wall_histories_follow_their_particles_and_only_those_at_a_wall_are_copied():
+    from fvdem.dem.neighbours import permute_wall_history
+    rng = np.random.default_rng(4)
+    n = 40
+    mask = np.where(rng.uniform(size=n) < 0.3, rng.integers(1, 4096, n), 0)
+    history = rng.normal(size=(n * 12, 4))
+    history.reshape(n, 12, 4)[mask == 0] = 0.0  # the kernel's invariant: no contact, no history
+    order = rng.permutation(n)
+    new = np.zeros_like(history)
+    permute_wall_history(history, mask, order, new)
+    np.testing.assert_array_equal(new.reshape(n, 12, 4), history.reshape(n, 12, 4)[order])
