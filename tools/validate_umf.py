@@ -74,7 +74,7 @@ def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings=
     lift and torque."""
     cells = max(1, round(width / 0.015))
     height = 0.2 * max(1.0, (0.06 / width) ** 2 * particles / 2000)
-    column = max(0.45, 0.015 * np.ceil((height + 0.3) / 0.015 - 1e-9), 0.015 * np.ceil(2.0 * height / 0.015 - 1e-9))
+    column = max(0.45, *(0.015 * np.ceil(h / 0.015 - 1e-9) for h in (height + 0.3, 2.0 * height)))  # whole cells
     p = {"shape": shape, "count": particles, "density": 1442.0, "colour": "single",
          "insertion": {"upper": [width, width, height], "seed": 7}}
     coupling = {"drag": "hoelzer-sommerfeld"}
@@ -127,8 +127,10 @@ def fit_umf(velocity, drop, weight, umf_experiment, touched_roof=None):
     fluidized hold did); Umf is where the fixed-bed branch ``a U + b U^2`` meets it."""
     velocity, drop = np.asarray(velocity), np.asarray(drop)
     fluidized = velocity >= 1.3 * umf_experiment
-    if touched_roof is not None and (fluidized & ~np.asarray(touched_roof, bool)).any():
-        fluidized &= ~np.asarray(touched_roof, bool)
+    if touched_roof is not None:
+        free = fluidized & ~np.asarray(touched_roof, bool)
+        if free.any():
+            fluidized = free
     plateau = float(drop[fluidized].mean())
     # the fixed-bed branch: the lowest velocities up to the first point at 0.85 W/A (a slugging bed's
     # short-hold average can dip below that at high velocity; it is not part of the branch)

@@ -66,6 +66,30 @@ def _add_to_partner(force, torque, j, fx, fy, fz, tx, ty, tz):
 
 
 @njit(cache=True, inline="always")
+def _normal(dx, dy, dz, dist2, radius_sum):
+    """Unit normal (partner to particle) and overlap [m] of a touching pair whose closest points are
+    ``d`` apart (``dist2 = |d|^2 < radius_sum^2``)."""
+    dist = math.sqrt(dist2)
+    if dist > 1e-14 * radius_sum:
+        inv = 1.0 / dist
+        return dx * inv, dy * inv, dz * inv, radius_sum - dist
+    return 0.0, 0.0, 1.0, radius_sum - dist  # coincident axes or centres: any direction is a normal
+
+
+@njit(cache=True, inline="always")
+def _pair_constants(i, j, ri, rj, mass, inertia, params, law, uniform, spheres):
+    """``(eta_n, r_eff, inertia_eff)`` of pair (i, j): precomputed in ``uniform`` when all particles are
+    identical (``uniform[0] >= 0``), else from the pair's masses, radii and smaller principal inertias
+    (``spheres``: the transverse one, which the kicks use; a sphere's two differ only at round-off)."""
+    if uniform[0] >= 0.0:
+        return uniform[0], uniform[1], uniform[2]
+    ii = inertia[i, 0] if spheres else min(inertia[i, 0], inertia[i, 1])
+    ij = inertia[j, 0] if spheres else min(inertia[j, 0], inertia[j, 1])
+    return (normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[0]), ri * rj / (ri + rj),
+            ii * ij / (ii + ij))
+
+
+@njit(cache=True, inline="always")
 def _pair_row(i, position, velocity, angular_velocity, axis, radius, half_length, mass, inertia, row_start,
               neighbours, history, force, torque, box_length, periodic, params, law, uniform):
     """Row i of the half list, any shapes: the partners' sides added to ``force``/``torque``; returns
@@ -105,13 +129,7 @@ def _pair_row(i, position, velocity, angular_velocity, axis, radius, half_length
         if dist2 >= radius_sum * radius_sum:
             _forget(history, slot)
             continue
-        dist = math.sqrt(dist2)
-        if dist > 1e-14 * radius_sum:
-            inv = 1.0 / dist
-            nx, ny, nz = dx * inv, dy * inv, dz * inv
-        else:  # coincident axes: any direction is a normal
-            nx, ny, nz = 0.0, 0.0, 1.0
-        overlap = radius_sum - dist
+        nx, ny, nz, overlap = _normal(dx, dy, dz, dist2, radius_sum)
         # lever arms from each centre to the contact point (middle of the overlap)
         li = ri - 0.5 * overlap
         lj = rj - 0.5 * overlap
@@ -123,14 +141,7 @@ def _pair_row(i, position, velocity, angular_velocity, axis, radius, half_length
         vx = vix + ci[0] - velocity[j, 0] - cj[0]
         vy = viy + ci[1] - velocity[j, 1] - cj[1]
         vz = viz + ci[2] - velocity[j, 2] - cj[2]
-        if same:
-            eta_n, r_eff, inertia_eff = uniform[0], uniform[1], uniform[2]
-        else:
-            eta_n = normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[0])
-            r_eff = ri * rj / radius_sum
-            ii = min(inertia[i, 0], inertia[i, 1])
-            ij = min(inertia[j, 0], inertia[j, 1])
-            inertia_eff = ii * ij / (ii + ij)
+        eta_n, r_eff, inertia_eff = _pair_constants(i, j, ri, rj, mass, inertia, params, law, uniform, False)
         fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
             history, slot, overlap, nx, ny, nz, vx, vy, vz,
             wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)
@@ -183,13 +194,7 @@ def _sphere_row(i, position, velocity, angular_velocity, radius, mass, inertia, 
         if dist2 >= radius_sum * radius_sum:
             _forget(history, slot)
             continue
-        dist = math.sqrt(dist2)
-        if dist > 1e-14 * radius_sum:
-            inv = 1.0 / dist
-            nx, ny, nz = dx * inv, dy * inv, dz * inv
-        else:  # coincident centres: any direction is a normal
-            nx, ny, nz = 0.0, 0.0, 1.0
-        overlap = radius_sum - dist
+        nx, ny, nz, overlap = _normal(dx, dy, dz, dist2, radius_sum)
         li = ri - 0.5 * overlap
         lj = rj - 0.5 * overlap
         wj0, wj1, wj2 = angular_velocity[j, 0], angular_velocity[j, 1], angular_velocity[j, 2]
@@ -200,12 +205,7 @@ def _sphere_row(i, position, velocity, angular_velocity, radius, mass, inertia, 
         vx = vix - velocity[j, 0] - (sy * nz - sz * ny)
         vy = viy - velocity[j, 1] - (sz * nx - sx * nz)
         vz = viz - velocity[j, 2] - (sx * ny - sy * nx)
-        if same:
-            eta_n, r_eff, inertia_eff = uniform[0], uniform[1], uniform[2]
-        else:
-            eta_n = normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[0])
-            r_eff = ri * rj / radius_sum
-            inertia_eff = inertia[i, 0] * inertia[j, 0] / (inertia[i, 0] + inertia[j, 0])
+        eta_n, r_eff, inertia_eff = _pair_constants(i, j, ri, rj, mass, inertia, params, law, uniform, True)
         fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
             history, slot, overlap, nx, ny, nz, vx, vy, vz,
             wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)

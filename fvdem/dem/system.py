@@ -263,10 +263,10 @@ class DEMSystem:
         total_cells = int(np.prod(self._n_cells))
         start = cell_starts(self._cell_of, total_cells)
         counts = np.zeros(n, np.int64)
-        # the list's per-thread scratch: one more column than a particle can have candidates
-        candidates = (2 * self.cell_span + 1) ** 3 * int(np.diff(start).max(initial=0)) + 1
-        if self._scratch.shape[1] < candidates:
-            self._scratch = np.empty((numba.config.NUMBA_NUM_THREADS, candidates + candidates // 2), np.int32)
+        if self.track_orientation:  # the rods' per-thread scratch: one more column than a rod has candidates
+            candidates = (2 * self.cell_span + 1) ** 3 * int(np.diff(start).max(initial=0)) + 1
+            if self._scratch.shape[1] < candidates:
+                self._scratch = np.empty((numba.config.NUMBA_NUM_THREADS, candidates + candidates // 2), np.int32)
         args = (p.position, p.axis, p.radius, p.half_length, self._box_lo, self._box_len, self._periodic,
                 self._cell_size, self._n_cells, self._cell_of, start, self.skin, self.cell_span,
                 not self.track_orientation)
