@@ -306,3 +306,18 @@ def test_a_ramped_inlet_resumes_bit_for_bit_during_and_after_its_ramp(tmp_path, 
     for key in a:
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
     assert (tmp_path / "straight" / "timeseries.csv").read_text() == (tmp_path / "split" / "timeseries.csv").read_text()
+
+
+def test_a_time_series_of_another_version_resumes_with_its_columns_kept_by_name(tmp_path):
+    """A checkpoint written by a version with other time-series columns: on resume the rows up to the
+    checkpoint keep their values under their names, a new column reads nan there, a dropped one goes."""
+    from fvdem.io.timeseries import TimeseriesWriter
+    path = tmp_path / "timeseries.csv"
+    path.write_text("time,kinetic_energy,old_column\n0.1,1.5,7\n0.2,2.5,8\n0.3,3.5,9\n")
+    writer = TimeseriesWriter(path, ["time", "vertical_momentum", "kinetic_energy"])
+    writer.start(resume_time=0.2)
+    writer.append({"time": 0.25, "vertical_momentum": 0.5, "kinetic_energy": 3.0})
+    rows = [line.split(",") for line in path.read_text().split()]
+    assert rows[0] == ["time", "vertical_momentum", "kinetic_energy"]
+    assert rows[1] == ["0.1", "nan", "1.5"] and rows[2] == ["0.2", "nan", "2.5"]
+    assert [float(v) for v in rows[3]] == [0.25, 0.5, 3.0] and len(rows) == 4

@@ -124,3 +124,36 @@ def test_a_killed_ramp_resumes_from_its_last_hold_bit_for_bit(tmp_path, monkeypa
     # without --resume an existing ramp folder is started again, not mixed into
     again = tool.ramp(dict(killed))
     assert again["curve"] == straight["curve"]
+
+
+def _write_series(folder, t, columns):
+    names = ["time", *columns]
+    rows = np.column_stack([t, *columns.values()])
+    lines = [",".join(names)] + [",".join(repr(float(v)) for v in row) for row in rows]
+    (folder / "timeseries.csv").write_text("\n".join(lines) + "\n")
+
+
+def test_the_acceleration_correction_recovers_the_long_time_mean_from_a_fraction_of_a_slug(tmp_path):
+    """A plug of mass M rising and falling with a 0.5 s period, the walls carrying 3 % of its weight:
+    its momentum balance ``A dp = W - F_wall + M dv/dt`` sets the pressure drop. A window of 0.3 of a
+    period catches the plug mid-swing (raw mean far from the long-time mean); less the plug's momentum
+    change over the window, the mean is the long-time one, ``(W - F_wall) / A``, to the trapezoid's error."""
+    area, mass, g = 0.0225, 3.6, 9.81
+    weight = mass * g
+    omega, amplitude = 2 * np.pi / 0.5, 0.05
+    t = np.arange(0.0, 1.0 + 1e-9, tool.SAMPLE)
+    velocity = amplitude * omega * np.cos(omega * t + 0.4)
+    acceleration = -amplitude * omega ** 2 * np.sin(omega * t + 0.4)
+    drop = (weight - 0.03 * weight + mass * acceleration) / area
+    _write_series(tmp_path, t, {"bed_pressure_drop": drop, "bed_top": np.full_like(t, 0.3),
+                                "vertical_momentum": mass * velocity})
+    hold = 0.3  # the tool averages its second half: 0.15 s, 0.3 of a period
+    mean, std, top, corrected = tool.hold_statistics(tmp_path, 0.8, hold, area)
+    exact = 0.97 * weight / area
+    assert abs(mean - exact) > 0.05 * exact  # the raw mean of the window is off by the swing
+    assert corrected == pytest.approx(exact, rel=1e-4)
+    assert std > 0.1 * exact and top == pytest.approx(0.3)
+    # without the momentum column (a time series of an older run) there is no correction
+    _write_series(tmp_path, t, {"bed_pressure_drop": drop, "bed_top": np.full_like(t, 0.3)})
+    assert tool.hold_statistics(tmp_path, 0.8, hold, area)[3] is None
+    assert tool.hold_statistics(tmp_path, 0.8, hold)[0] == pytest.approx(mean)

@@ -7,7 +7,10 @@ drop averaged over the second half of the hold. Umf is where the fixed-bed branc
 ``dP = a U + b U^2``, Ergun's form with a, b >= 0, through the lowest velocities up to the first
 point at 0.85 W/A) meets the fluidized plateau
 (the mean of the points at and above 1.3 x the experimental Umf, less those whose bed touched the roof,
-``touched_roof``); ``umf_at_weight`` meets W/A itself. The inlet rises linearly from 0 over the start
+``touched_roof``); ``umf_at_weight`` meets W/A itself. A slugging bed's pressure drop swings with the
+plug's rise and fall, so each hold's mean is also given less what the bed's acceleration over the
+averaged window owes it (``over_weight_acceleration_corrected``, from the particles' momentum balance;
+``hold_statistics``), and the plateau of those (``plateau_over_weight_acceleration_corrected``). The inlet rises linearly from 0 over the start
 (``--start``): a full-speed start lifts a packed bed as one plug.
 Umf is a property of particles and gas, so a shallower bed than the paper's may be used: the output
 says which bed was used (``--width 0.15 --particles 32500`` is the paper's own bed).
@@ -153,10 +156,17 @@ def fit_umf(velocity, drop, weight, umf_experiment, touched_roof=None):
 SAMPLE = 5e-4  # s between pressure-drop samples of a hold (the ramp's time series interval)
 
 
-def hold_statistics(folder, end_time, hold):
-    """Mean and standard deviation of the bed pressure drop [Pa] over the second half of the hold that
-    ended at ``end_time`` [s], from the ramp's time series (samples every ``SAMPLE`` s), and the highest
-    bed top [m] (99 % of the particle tops below it) over the same samples."""
+def hold_statistics(folder, end_time, hold, area=None):
+    """The bed pressure drop over the second half of the hold that ended at ``end_time`` [s], from the
+    ramp's time series (samples every ``SAMPLE`` s): its mean and standard deviation [Pa], the highest
+    bed top [m] (99 % of the particle tops below it) over the same samples, and the mean corrected for
+    the bed's acceleration [Pa] (None without ``area`` or without the ``vertical_momentum`` column).
+
+    The correction: the particles' momentum balance against gravity reads ``A dp = W - F_wall + dP/dt``
+    (``dp`` the bed pressure drop, ``W`` the weight, ``F_wall`` what the walls carry, ``P`` the
+    particles' upward momentum), so ``(1/T) int dp dt - (P(t1) - P(t0)) / (A T)`` has the long-time mean
+    of ``dp`` and none of the swing of a slugging bed caught mid-rise or mid-fall by a short window: a
+    control variate, exact in expectation, whose remainder is the walls' share ``-F_wall / A``."""
     from fvdem.analysis.plots import read_timeseries
     series = read_timeseries(folder)
     t = series["time"]
@@ -164,16 +174,24 @@ def hold_statistics(folder, end_time, hold):
     first = end_time - hold + (steps // 2 + 1) * SAMPLE
     window = (t >= first - 0.25 * SAMPLE) & (t <= end_time + 0.25 * SAMPLE)
     values = series["bed_pressure_drop"][window]
-    return float(np.mean(values)), float(np.std(values)), float(np.max(series["bed_top"][window]))
+    corrected = None
+    momentum = series.get("vertical_momentum")
+    if area is not None and momentum is not None and window.sum() > 1 and np.all(np.isfinite(momentum[window])):
+        tw, mw = t[window], momentum[window]
+        span = float(tw[-1] - tw[0])
+        corrected = float(np.trapezoid(values, tw) / span - (mw[-1] - mw[0]) / (area * span))
+    return (float(np.mean(values)), float(np.std(values)), float(np.max(series["bed_top"][window])),
+            corrected)
 
 
 def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
-    """One point of the curve: the hold's pressure drop and, for the bed as it is at the end of the
-    hold, the uniform bed of its core packing and equivalent height under the closure at this velocity
-    (the CFD-DEM's own error, hold by hold). ``touched_roof``: the bed top came within a particle
-    diameter of the roof during the averaged half of the hold (the roof then carries part of the bed,
-    and the pressure drop is not the fluidized bed's)."""
-    drop, spread, top = hold_statistics(folder, sim.time, hold)
+    """One point of the curve: the hold's pressure drop (and the same corrected for the bed's
+    acceleration over the averaged window, ``hold_statistics``) and, for the bed as it is at the end of
+    the hold, the uniform bed of its core packing and equivalent height under the closure at this
+    velocity (the CFD-DEM's own error, hold by hold). ``touched_roof``: the bed top came within a
+    particle diameter of the roof during the averaged half of the hold (the roof then carries part of
+    the bed, and the pressure drop is not the fluidized bed's)."""
+    drop, spread, top, corrected = hold_statistics(folder, sim.time, hold, area)
     roof = float(sim.case.domain.upper[2])
     size = 2.0 * float((sim.particles.radius + sim.particles.half_length).max())
     hold_packing = packed_state(sim)
@@ -181,7 +199,9 @@ def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
     uniform = uniform_bed_pressure_gradient(sim.bridge.model, 1.0 - hold_packing["solids_fraction"], u,
                                             hold_packing["axes"]) * solid_height / hold_packing["solids_fraction"]
     return {"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
-            "over_weight": drop / weight, "packed_solids_fraction": hold_packing["solids_fraction"],
+            "over_weight": drop / weight,
+            "over_weight_acceleration_corrected": None if corrected is None else corrected / weight,
+            "packed_solids_fraction": hold_packing["solids_fraction"],
             "closure_uniform_bed_over_weight": uniform / weight, "end_time": sim.time,
             "bed_top_max": top, "touched_roof": bool(top >= roof - size)}
 
@@ -262,6 +282,8 @@ def ramp(spec, threads=None):
         print(f"{tag}: U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {c['pressure_drop']:.1f} Pa = "
               f"{c['over_weight']:.3f} W/A (+- {c['pressure_drop_std']:.1f}); core solids "
               f"{c['packed_solids_fraction']:.4f}, a uniform bed of it {c['closure_uniform_bed_over_weight']:.3f} W/A"
+              + ("" if c.get("over_weight_acceleration_corrected") is None else
+                 f"; {c['over_weight_acceleration_corrected']:.3f} W/A less the bed's acceleration")
               + ("; the bed touched the roof (left out of the plateau)" if c["touched_roof"] else ""),
               flush=True)
     velocity = [c["velocity"] for c in curve]
@@ -270,6 +292,12 @@ def ramp(spec, threads=None):
     plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp, roofed)
     # the fixed-bed branch against W/A itself rather than the measured plateau
     umf_at_weight = None if umf is None else branch_crossing(a, b, weight)
+    # the same plateau with each hold's mean corrected for the bed's acceleration (hold_statistics)
+    corrected = [c.get("over_weight_acceleration_corrected") for c in curve]
+    plateau_corrected = umf_at_corrected = None
+    if all(v is not None for v in corrected):
+        plateau_corrected = fit_umf(velocity, np.asarray(corrected) * weight, weight, umf_exp, roofed)[0]
+        umf_at_corrected = None if umf is None else branch_crossing(a, b, plateau_corrected)
     p = case.particles
     d_p = float(spherocylinder_shape(p.diameter, p.length or p.diameter)[0])
     phi = float(sphericities(p.diameter, p.length or p.diameter, 0.0)[0])
@@ -286,6 +314,8 @@ def ramp(spec, threads=None):
         "umf_simulated": umf, "umf_experiment": umf_exp,
         "relative_error": None if umf is None else (umf - umf_exp) / umf_exp,
         "plateau_over_weight": plateau / weight,
+        "plateau_over_weight_acceleration_corrected": None if plateau_corrected is None else plateau_corrected / weight,
+        "umf_at_corrected_plateau": umf_at_corrected,
         "umf_wen_yu": wen_yu(d_p, p.density),
         "umf_at_weight": umf_at_weight,
         "drag": case.coupling.drag,

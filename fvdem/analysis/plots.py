@@ -31,6 +31,7 @@ def read_timeseries(out) -> dict:
 
 
 LOG_SCALE = {"kinetic_energy", "max_overlap_over_diameter"}
+NOT_PLOTTED = {"vertical_momentum"}  # a bookkeeping column (pressure-drop averages), not a state to watch
 LABELS = {"kinetic_energy": "kinetic energy [J]", "bed_top": "bed top [m]",
           "contacts_per_particle": "contacts per particle", "max_overlap_over_diameter": "max overlap / diameter",
           "rms_speed": "RMS particle speed [m/s]", "max_speed": "max particle speed [m/s]",
@@ -44,7 +45,7 @@ def plot_timeseries(out) -> Path:
     """Every recorded diagnostic against time (whatever the run's phases wrote)."""
     plt = _pyplot()
     ts = read_timeseries(out)
-    keys = [k for k in ts if k != "time"][:8]
+    keys = [k for k in ts if k != "time" and k not in NOT_PLOTTED][:8]
     rows = (len(keys) + 1) // 2
     fig, axes = plt.subplots(rows, 2, figsize=(9, 2.6 * rows), sharex=True, squeeze=False)
     for ax, key in zip(axes.flat, keys):

@@ -19,7 +19,11 @@ class TimeseriesWriter:
             return
         with open(self.path, newline="") as fh:
             rows = list(csv.reader(fh))
-        kept = [rows[0]] + [r for r in rows[1:] if r and float(r[0]) <= resume_time * (1 + 1e-12)]
+        kept = [r for r in rows[1:] if r and float(r[0]) <= resume_time * (1 + 1e-12)]
+        if rows[0] != self.columns:  # written by another version: its columns kept by name, new ones nan
+            where = {name: k for k, name in enumerate(rows[0])}
+            kept = [[r[where[c]] if c in where else "nan" for c in self.columns] for r in kept]
+        kept = [self.columns] + kept
         with open(self.path, "w", newline="") as fh:
             csv.writer(fh).writerows(kept)
 

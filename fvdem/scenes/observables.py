@@ -11,13 +11,15 @@ from .base import Observable
 
 class Particles(Observable):
     """DEM state: kinetic energy [J], largest overlap / d, contacts per particle, bed top (99th
-    percentile of the particle tops) [m], rms and largest speed [m/s]; the summary adds the packed
-    bed (core solids fraction, equivalent height), cost per particle-step and neighbour rebuilds."""
+    percentile of the particle tops) [m], rms and largest speed [m/s], and the particles' momentum
+    against gravity [kg m/s] (``sum m v . (-g/|g|)``: its change over a window is what a pressure-drop
+    average over that window owes to the bed's acceleration); the summary adds the packed bed (core
+    solids fraction, equivalent height), cost per particle-step and neighbour rebuilds."""
 
     name = "particles"
     plots = ("colours", "orientation")
     COLUMNS = ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle", "bed_top", "rms_speed",
-               "max_speed")
+               "max_speed", "vertical_momentum")
 
     def columns(self, model):
         return self.COLUMNS
@@ -27,6 +29,10 @@ class Particles(Observable):
         out = model.dem.diagnostics()
         del out["time"]
         out["bed_top"] = bed_top(p.position, p.axis, p.radius, p.half_length)
+        gravity = np.asarray(model.dem.gravity, dtype=np.float64)
+        g = float(np.linalg.norm(gravity))
+        up = -gravity / g if g > 0.0 else np.array([0.0, 0.0, 1.0])
+        out["vertical_momentum"] = float(p.mass @ (p.velocity @ up))
         return out
 
     def summary(self, model, values, history, run):
