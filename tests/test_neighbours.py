@@ -183,3 +183,17 @@ def test_wall_histories_follow_their_particles_and_only_those_at_a_wall_are_copi
     new = np.zeros_like(history)
     permute_wall_history(history, mask, order, new)
     np.testing.assert_array_equal(new.reshape(n, 12, 4), history.reshape(n, 12, 4)[order])
+
+
+def test_particle_arrays_copy_what_the_caller_passes():
+    """A caller's position, velocity and colour arrays are not the simulation's: stepping leaves them
+    as they were (they were advanced in place before)."""
+    from fvdem.dem.particles import ParticleArrays
+    position = np.array([[0.01, 0.02, 0.03], [0.04, 0.05, 0.06]])
+    velocity = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    colour = np.array([0, 1], np.int32)
+    p = ParticleArrays.create(position, 1e-3, 0.0, 2500.0, velocity=velocity, colour=colour)
+    p.position += 1.0
+    p.velocity += 1.0
+    p.colour += 1
+    assert position[0, 0] == 0.01 and velocity[0, 0] == 1.0 and colour[1] == 1

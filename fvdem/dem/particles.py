@@ -133,8 +133,9 @@ class ParticleArrays:
 
     @classmethod
     def create(cls, position, radius, half_length, density, axis=None, colour=None, velocity=None):
-        """Allocate arrays for particles at ``position`` with given shape and density [kg/m^3]."""
-        position = np.ascontiguousarray(position, dtype=FLOAT)
+        """Allocate arrays for particles at ``position`` with given shape and density [kg/m^3]. The
+        arrays passed in are copied: the simulation advances its own, never the caller's."""
+        position = np.array(position, dtype=FLOAT, order="C", copy=True)
         n = len(position)
         radius = np.broadcast_to(np.asarray(radius, dtype=FLOAT), (n,)).copy()
         half_length = np.broadcast_to(np.asarray(half_length, dtype=FLOAT), (n,)).copy()
@@ -145,7 +146,7 @@ class ParticleArrays:
         zeros3 = lambda: np.zeros((n, 3), dtype=FLOAT)  # noqa: E731
         return cls(
             position=position,
-            velocity=zeros3() if velocity is None else np.ascontiguousarray(velocity, dtype=FLOAT),
+            velocity=zeros3() if velocity is None else np.array(velocity, dtype=FLOAT, order="C", copy=True),
             angular_momentum=zeros3(),
             angular_velocity=zeros3(),
             quaternion=quaternion,
@@ -154,7 +155,7 @@ class ParticleArrays:
             half_length=half_length,
             mass=density * spherocylinder_volume(radius, half_length),
             inertia=np.ascontiguousarray(np.stack([transverse, axial], axis=1)),
-            colour=np.zeros(n, dtype=np.int32) if colour is None else np.asarray(colour, dtype=np.int32),
+            colour=np.zeros(n, dtype=np.int32) if colour is None else np.array(colour, dtype=np.int32, copy=True),
             ids=np.arange(n, dtype=np.int64),
             contact_force=zeros3(),
             contact_torque=zeros3(),
