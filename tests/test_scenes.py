@@ -82,3 +82,20 @@ def test_the_vertical_momentum_column_is_the_particles_momentum_against_gravity(
     sim.model.dem.gravity[:] = (9.81, 0.0, 0.0)
     values = Particles().measure(sim.model, {})
     assert values["vertical_momentum"] == pytest.approx(-float((p.mass * p.velocity[:, 0]).sum()), rel=1e-12)
+
+
+def test_the_wall_force_column_is_the_weight_a_resting_bed_puts_on_the_floor(tmp_path):
+    """Particles settled on the floor of a closed box: the walls carry the whole weight, and the pair
+    forces cancel in the column's sum (``wall_force_vertical`` = m g to the settling's residue)."""
+    import numpy as np
+    import fvdem
+    from fvdem.scenes.observables import Particles
+    table = {"particles": {"count": 4, "diameter": "5 mm"}, "domain": {"upper": [0.02, 0.02, 0.03]},
+             "gas": {"enabled": False}, "output": {"progress": False}}
+    sim = fvdem.Simulation(case_from_dict(table), tmp_path / "run", progress=False)
+    sim.run(0.4)
+    p = sim.particles
+    weight = float(p.mass.sum()) * 9.81
+    values = Particles().measure(sim.model, {})
+    assert float(np.abs(p.velocity).max()) < 1e-2
+    assert values["wall_force_vertical"] == pytest.approx(weight, rel=2e-2)

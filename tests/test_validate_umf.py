@@ -146,13 +146,16 @@ def test_the_acceleration_correction_recovers_the_long_time_mean_from_a_fraction
     acceleration = -amplitude * omega ** 2 * np.sin(omega * t + 0.4)
     drop = (weight - 0.03 * weight + mass * acceleration) / area
     _write_series(tmp_path, t, {"bed_pressure_drop": drop, "bed_top": np.full_like(t, 0.3),
-                                "vertical_momentum": mass * velocity})
+                                "vertical_momentum": mass * velocity,
+                                "wall_force_vertical": np.full_like(t, 0.03 * weight)})
     hold = 0.3  # the tool averages its second half: 0.15 s, 0.3 of a period
-    mean, std, top, corrected = tool.hold_statistics(tmp_path, 0.8, hold, area)
+    mean, std, top, corrected, walls = tool.hold_statistics(tmp_path, 0.8, hold, area)
     exact = 0.97 * weight / area
     assert abs(mean - exact) > 0.05 * exact  # the raw mean of the window is off by the swing
     assert corrected == pytest.approx(exact, rel=1e-4)
     assert std > 0.1 * exact and top == pytest.approx(0.3)
+    assert walls == pytest.approx(0.03 * weight)  # what remains: the walls' share, measured apart
+    assert corrected == pytest.approx((weight - walls) / area, rel=1e-4)
     # without the momentum column (a time series of an older run) there is no correction
     _write_series(tmp_path, t, {"bed_pressure_drop": drop, "bed_top": np.full_like(t, 0.3)})
     assert tool.hold_statistics(tmp_path, 0.8, hold, area)[3] is None

@@ -10,7 +10,9 @@ point at 0.85 W/A) meets the fluidized plateau
 ``touched_roof``); ``umf_at_weight`` meets W/A itself. A slugging bed's pressure drop swings with the
 plug's rise and fall, so each hold's mean is also given less what the bed's acceleration over the
 averaged window owes it (``over_weight_acceleration_corrected``, from the particles' momentum balance;
-``hold_statistics``), and the plateau of those (``plateau_over_weight_acceleration_corrected``). The inlet rises linearly from 0 over the start
+``hold_statistics``), and the plateau of those (``plateau_over_weight_acceleration_corrected``); what
+remains of the departure from W/A is the weight the walls carry (``walls_share_of_weight``, measured:
+side-wall friction and the distributor). The inlet rises linearly from 0 over the start
 (``--start``): a full-speed start lifts a packed bed as one plug.
 Umf is a property of particles and gas, so a shallower bed than the paper's may be used: the output
 says which bed was used (``--width 0.15 --particles 32500`` is the paper's own bed).
@@ -159,8 +161,10 @@ SAMPLE = 5e-4  # s between pressure-drop samples of a hold (the ramp's time seri
 def hold_statistics(folder, end_time, hold, area=None):
     """The bed pressure drop over the second half of the hold that ended at ``end_time`` [s], from the
     ramp's time series (samples every ``SAMPLE`` s): its mean and standard deviation [Pa], the highest
-    bed top [m] (99 % of the particle tops below it) over the same samples, and the mean corrected for
-    the bed's acceleration [Pa] (None without ``area`` or without the ``vertical_momentum`` column).
+    bed top [m] (99 % of the particle tops below it) over the same samples, the mean corrected for
+    the bed's acceleration [Pa] (None without ``area`` or without the ``vertical_momentum`` column), and
+    the mean force the walls (distributor included) exert on the particles against gravity [N] (None
+    without the ``wall_force_vertical`` column).
 
     The correction: the particles' momentum balance against gravity reads ``A dp = W - F_wall + dP/dt``
     (``dp`` the bed pressure drop, ``W`` the weight, ``F_wall`` what the walls carry, ``P`` the
@@ -180,8 +184,10 @@ def hold_statistics(folder, end_time, hold, area=None):
         tw, mw = t[window], momentum[window]
         span = float(tw[-1] - tw[0])
         corrected = float(np.trapezoid(values, tw) / span - (mw[-1] - mw[0]) / (area * span))
+    walls = series.get("wall_force_vertical")
+    walls = None if walls is None or not np.all(np.isfinite(walls[window])) else float(np.mean(walls[window]))
     return (float(np.mean(values)), float(np.std(values)), float(np.max(series["bed_top"][window])),
-            corrected)
+            corrected, walls)
 
 
 def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
@@ -191,7 +197,7 @@ def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
     velocity (the CFD-DEM's own error, hold by hold). ``touched_roof``: the bed top came within a
     particle diameter of the roof during the averaged half of the hold (the roof then carries part of
     the bed, and the pressure drop is not the fluidized bed's)."""
-    drop, spread, top, corrected = hold_statistics(folder, sim.time, hold, area)
+    drop, spread, top, corrected, walls = hold_statistics(folder, sim.time, hold, area)
     roof = float(sim.case.domain.upper[2])
     size = 2.0 * float((sim.particles.radius + sim.particles.half_length).max())
     hold_packing = packed_state(sim)
@@ -201,6 +207,7 @@ def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
     return {"velocity": u, "pressure_drop": drop, "pressure_drop_std": spread,
             "over_weight": drop / weight,
             "over_weight_acceleration_corrected": None if corrected is None else corrected / weight,
+            "walls_share_of_weight": None if walls is None else walls / (weight * area),
             "packed_solids_fraction": hold_packing["solids_fraction"],
             "closure_uniform_bed_over_weight": uniform / weight, "end_time": sim.time,
             "bed_top_max": top, "touched_roof": bool(top >= roof - size)}
@@ -284,6 +291,8 @@ def ramp(spec, threads=None):
               f"{c['packed_solids_fraction']:.4f}, a uniform bed of it {c['closure_uniform_bed_over_weight']:.3f} W/A"
               + ("" if c.get("over_weight_acceleration_corrected") is None else
                  f"; {c['over_weight_acceleration_corrected']:.3f} W/A less the bed's acceleration")
+              + ("" if c.get("walls_share_of_weight") is None else
+                 f"; the walls carry {c['walls_share_of_weight']:+.3f} W")
               + ("; the bed touched the roof (left out of the plateau)" if c["touched_roof"] else ""),
               flush=True)
     velocity = [c["velocity"] for c in curve]

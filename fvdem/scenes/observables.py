@@ -11,15 +11,19 @@ from .base import Observable
 
 class Particles(Observable):
     """DEM state: kinetic energy [J], largest overlap / d, contacts per particle, bed top (99th
-    percentile of the particle tops) [m], rms and largest speed [m/s], and the particles' momentum
+    percentile of the particle tops) [m], rms and largest speed [m/s], the particles' momentum
     against gravity [kg m/s] (``sum m v . (-g/|g|)``: its change over a window is what a pressure-drop
-    average over that window owes to the bed's acceleration); the summary adds the packed bed (core
+    average over that window owes to the bed's acceleration) and the force the walls exert on the
+    particles against gravity [N] (``sum F_contact . (-g/|g|)``: the pair forces cancel in the sum, so it
+    is the walls' alone, distributor included: the part of the weight the gas does not carry); the
+    summary adds the packed bed (core
     solids fraction, equivalent height), cost per particle-step and neighbour rebuilds."""
 
     name = "particles"
     plots = ("colours", "orientation")
     COLUMNS = ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle", "bed_top", "rms_speed",
-               "max_speed", "vertical_momentum")
+               "max_speed", "vertical_momentum",
+               "wall_force_vertical")
 
     def columns(self, model):
         return self.COLUMNS
@@ -33,6 +37,7 @@ class Particles(Observable):
         g = float(np.linalg.norm(gravity))
         up = -gravity / g if g > 0.0 else np.array([0.0, 0.0, 1.0])
         out["vertical_momentum"] = float(p.mass @ (p.velocity @ up))
+        out["wall_force_vertical"] = float((p.contact_force @ up).sum())
         return out
 
     def summary(self, model, values, history, run):
