@@ -241,7 +241,7 @@ def main(argv=None) -> int:
     parser.add_argument("--measure-beds", action="store_true",
                         help="record the settled beds' packing in --beds (needs runs/bed_ar1 and runs/bed_ar4)")
     args = parser.parse_args(argv)
-    wall0 = time.perf_counter()
+    wall0, cpu0 = time.perf_counter(), time.process_time()
     beds = measure_beds(args.beds) if args.measure_beds else json.loads(args.beds.read_text())
     with warnings.catch_warnings():  # the root finders try far outside the ranges: judged at the answers
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -252,11 +252,12 @@ def main(argv=None) -> int:
               "laws": {name: {"umf": {bed: umf[bed]["laws"][name] for bed in umf},
                               "hindered": settling["laws"][name]} for name in drag_laws()},
               "outside_fitted_range": OUTSIDE,
-              "wall_seconds": None}
+              "wall_seconds": None, "cpu_seconds": None}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     result["chart"] = str(chart(result, out / "closure_atlas.png"))
     result["wall_seconds"] = time.perf_counter() - wall0
+    result["cpu_seconds"] = time.process_time() - cpu0  # the atlas's own cost, whatever else runs beside it
     for name, entry in result["laws"].items():
         cells = [f"{bed} {v:.3f} m/s ({100 * (v / MEASURED_UMF[bed] - 1):+.0f} %)" if v is not None else f"{bed} -"
                  for bed, v in entry["umf"].items()]
