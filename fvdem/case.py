@@ -247,10 +247,11 @@ class CouplingConfig:
     enabled: bool = spec(True, kind="bool", doc="exchange momentum between gas and particles (when both are present)")
     drag: str = spec("hoelzer-sommerfeld", kind="str", registry="drag",
                      doc="drag closure. Gas-fluidized coarse beds: the paper's laws to reproduce seed 000, 'gidaspow' "
-                         "for Umf (simulated in the paper's bed of spheres: 1.562 m/s against the measured 1.58; "
-                         "the particle-resolved laws 35-113 % above in the atlas); liquid suspensions: 'tenneti' "
-                         "or 'beetstra' (simulated: 34-45 % slower settling than the default at solids 0.2-0.4) "
-                         "(docs/coupling.md, tools/closure_atlas.py)")
+                         "for Umf (simulated in the paper's bed: spheres 1.59-1.75 m/s against the measured 1.58, "
+                         "the closure's Umf at the packing the bed collapses to, 0.577-0.537; AR-4 rods 1.61 "
+                         "against 1.7; the particle-resolved laws 35-113 % above for spheres); liquid suspensions: "
+                         "'tenneti' or 'beetstra' (simulated: 34-45 % slower settling than the default at solids "
+                         "0.2-0.4) (docs/coupling.md, tools/closure_atlas.py)")
     lift: str = spec("none", kind="str", registry="lift", doc="lift closure (spherocylinders only)")
     torque: str = spec("none", kind="str", registry="torque", doc="hydrodynamic torque closure (spherocylinders only)")
     pressure_gradient_force: bool = spec(True, kind="bool", doc="apply -V_p grad p to the particles")
