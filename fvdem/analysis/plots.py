@@ -31,7 +31,7 @@ def read_timeseries(out) -> dict:
 
 
 LOG_SCALE = {"kinetic_energy", "max_overlap_over_diameter"}
-NOT_PLOTTED = {"vertical_momentum", "wall_force_vertical"}  # a bookkeeping column (pressure-drop averages), not a state to watch
+NOT_PLOTTED = {"vertical_momentum", "wall_force_vertical"}  # bookkeeping for pressure-drop averages, not states to watch
 LABELS = {"kinetic_energy": "kinetic energy [J]", "bed_top": "bed top [m]",
           "contacts_per_particle": "contacts per particle", "max_overlap_over_diameter": "max overlap / diameter",
           "rms_speed": "RMS particle speed [m/s]", "max_speed": "max particle speed [m/s]",

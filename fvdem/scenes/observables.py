@@ -16,14 +16,13 @@ class Particles(Observable):
     average over that window owes to the bed's acceleration) and the force the walls exert on the
     particles against gravity [N] (``sum F_contact . (-g/|g|)``: the pair forces cancel in the sum, so it
     is the walls' alone, distributor included: the part of the weight the gas does not carry); the
-    summary adds the packed bed (core
-    solids fraction, equivalent height), cost per particle-step and neighbour rebuilds."""
+    summary adds the packed bed (core solids fraction, equivalent height), cost per particle-step and
+    neighbour rebuilds."""
 
     name = "particles"
     plots = ("colours", "orientation")
     COLUMNS = ("kinetic_energy", "max_overlap_over_diameter", "contacts_per_particle", "bed_top", "rms_speed",
-               "max_speed", "vertical_momentum",
-               "wall_force_vertical")
+               "max_speed", "vertical_momentum", "wall_force_vertical")
 
     def columns(self, model):
         return self.COLUMNS
