@@ -126,17 +126,23 @@ def branch_crossing(a, b, level):
     return float(level / a if abs(b) < 1e-12 else (-a + np.sqrt(a * a + 4 * b * level)) / (2 * b))
 
 
-def fit_umf(velocity, drop, weight, umf_experiment, touched_roof=None):
-    """``(plateau, Umf, (a, b))``: the plateau is the mean of the holds at and above 1.3 Umf,exp, less
-    those where the bed touched the roof (``touched_roof``, a flag per hold; all of them when every
-    fluidized hold did); Umf is where the fixed-bed branch ``a U + b U^2`` meets it."""
+def plateau_of(velocity, drop, umf_experiment, touched_roof=None):
+    """The mean of ``drop`` over the holds at and above 1.3 Umf,exp, less those where the bed touched
+    the roof (``touched_roof``, a flag per hold; all of them when every fluidized hold did)."""
     velocity, drop = np.asarray(velocity), np.asarray(drop)
     fluidized = velocity >= 1.3 * umf_experiment
     if touched_roof is not None:
         free = fluidized & ~np.asarray(touched_roof, bool)
         if free.any():
             fluidized = free
-    plateau = float(drop[fluidized].mean())
+    return float(drop[fluidized].mean())
+
+
+def fit_umf(velocity, drop, weight, umf_experiment, touched_roof=None):
+    """``(plateau, Umf, (a, b))``: the plateau is ``plateau_of`` the holds; Umf is where the fixed-bed
+    branch ``a U + b U^2`` meets it."""
+    velocity, drop = np.asarray(velocity), np.asarray(drop)
+    plateau = plateau_of(velocity, drop, umf_experiment, touched_roof)
     # the fixed-bed branch: the lowest velocities up to the first point at 0.85 W/A (a slugging bed's
     # short-hold average can dip below that at high velocity; it is not part of the branch)
     order = np.argsort(velocity)
@@ -305,7 +311,7 @@ def ramp(spec, threads=None):
     corrected = [c.get("over_weight_acceleration_corrected") for c in curve]
     plateau_corrected = umf_at_corrected = None
     if all(v is not None for v in corrected):
-        plateau_corrected = fit_umf(velocity, np.asarray(corrected) * weight, weight, umf_exp, roofed)[0]
+        plateau_corrected = plateau_of(velocity, np.asarray(corrected) * weight, umf_exp, roofed)
         umf_at_corrected = None if umf is None else branch_crossing(a, b, plateau_corrected)
     p = case.particles
     d_p = float(spherocylinder_shape(p.diameter, p.length or p.diameter)[0])
