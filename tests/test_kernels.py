@@ -163,3 +163,71 @@ def test_fused_set_equals_its_laws_one_by_one(laws):
         law = closures.law(kind, name)
         assert np.array_equal(value, law.evaluate(particle, slip, voidage, axis))  # the same expressions
         assert_close(value, law.function(particle, slip, voidage, axis))
+
+
+def thread_counts():
+    return sorted({1, numba.config.NUMBA_NUM_THREADS})
+
+
+def on_each_thread_count(run):
+    """``run()`` on 1 and on all threads; the results (the numba default restored afterwards)."""
+    before = numba.get_num_threads()
+    try:
+        results = []
+        for threads in thread_counts():
+            numba.set_num_threads(threads)
+            results.append(run())
+        return results
+    finally:
+        numba.set_num_threads(before)
+
+
+@pytest.mark.parametrize("fixed", [False, True])
+def test_slip_at_particles_equals_clip_and_difference(fixed):
+    rng = np.random.default_rng(3)
+    n = 500
+    at = np.column_stack([rng.uniform(0.0, 1.2, n), rng.normal(size=(n, 3))])
+    velocity = rng.normal(size=(n, 3))
+    voidage, slip = kernels.slip_at_particles(at, velocity, 0.3, fixed, np.empty(n), np.empty((n, 3)))
+    assert np.array_equal(voidage, np.clip(at[:, 0], 0.3, 1.0))
+    assert np.array_equal(slip, at[:, 1:] - (0.0 if fixed else velocity))
+
+
+@pytest.mark.parametrize("n", [5, 3000])
+@pytest.mark.parametrize("gradient, lift, explicit", [(True, True, False), (False, False, True), (True, False, False)])
+def test_particle_forces_equal_the_numpy_sum_on_any_thread_count(n, gradient, lift, explicit):
+    """The gas's forces held on the particles: ``-V_p grad p + V_p G (+ lift) (+ explicit drag)`` and the
+    fluid velocity, written in place; the pressure part's total equal to numpy's to round-off and bit
+    for bit the same on any number of threads."""
+    rng = np.random.default_rng(11)
+    at = rng.normal(size=(n, 6)) * np.array([1.0, 1.0, 1.0, 1e4, 1e4, 1e4])
+    radius = rng.uniform(1e-3, 3e-3, n)
+    half_length = np.where(rng.uniform(size=n) < 0.5, 0.0, rng.uniform(0.0, 5e-3, n))
+    mean = np.array([0.0, 0.0, 1.2e4])
+    lift_in = rng.normal(size=(n, 3)) * 1e-4 if lift else np.zeros((0, 3))
+    drag_in = rng.normal(size=(n, 3)) * 1e-3 if explicit else np.zeros((0, 3))
+    volume = (np.pi * radius ** 2 * 2.0 * half_length + 4.0 / 3.0 * np.pi * radius ** 3)[:, None]
+    pressure_part = (-volume * at[:, 3:] if gradient else np.zeros((n, 3))) + volume * mean
+    expected = pressure_part + (lift_in if lift else 0.0) + (drag_in if explicit else 0.0)
+
+    def run():
+        fluid, external = np.empty((n, 3)), np.empty((n, 3))
+        total = kernels.particle_forces(at, gradient, radius, half_length, mean, lift_in, drag_in, fluid, external)
+        return fluid, external, total
+
+    results = on_each_thread_count(run)
+    fluid, external, total = results[0]
+    assert np.array_equal(fluid, at[:, :3])
+    np.testing.assert_allclose(external, expected, rtol=1e-12, atol=1e-15 * np.abs(expected).max())
+    np.testing.assert_allclose(total, pressure_part.sum(axis=0), rtol=1e-12, atol=1e-12 * np.abs(pressure_part).sum())
+    for other in results[1:]:
+        assert all(np.array_equal(a, b) for a, b in zip(other, results[0]))
+
+
+@pytest.mark.parametrize("n", [3, 5000])
+def test_column_sums_equal_numpy_on_any_thread_count(n):
+    values = np.random.default_rng(5).normal(size=(n, 3))
+    results = on_each_thread_count(lambda: kernels.column_sums(values))
+    np.testing.assert_allclose(results[0], values.sum(axis=0), rtol=0, atol=1e-12 * np.abs(values).sum())
+    for other in results[1:]:
+        assert np.array_equal(other, results[0])

@@ -39,11 +39,10 @@ from time import perf_counter
 
 import numpy as np
 
-from ..dem.particles import spherocylinder_volume
 from ..dem.system import SimulationError
 from . import closures
 from .interpolation import ParticleGridMap
-from .kernels import exchange_terms
+from .kernels import column_sums, exchange_terms, particle_forces, slip_at_particles
 from .voidage import voidage as map_voidage
 
 
@@ -86,7 +85,7 @@ class HydrodynamicModel:
         return closures.law("torque", self.torque).evaluate(self.particle, slip, voidage, axis)
 
 
-_NO_LIFT = np.zeros((0, 3))  # exchange_terms' "no lift"
+_NO_LIFT = np.zeros((0, 3))  # the kernels' "none" for lift and explicit drag
 
 
 def rotational_drag_torque(angular_velocity, inertia, coefficient, dt):
@@ -146,10 +145,6 @@ class CouplingBridge:
         self.last["over_packed_cells"] = over_packed
         return eps
 
-    def particle_volume(self):
-        p = self.dem.particles
-        return spherocylinder_volume(p.radius, p.half_length)
-
     # ------------------------------------------------------------------ one interval
     def advance(self) -> None:
         """One CFD step of the gas and ``substeps`` DEM steps of the particles, coupled."""
@@ -173,9 +168,9 @@ class CouplingBridge:
             return out
         # voidage and gas velocity at the particles in one pass over the weights
         at_particles = grid_map.gather(np.column_stack([eps, s.flux_velocity()]))
-        eps_p = np.clip(at_particles[:, 0], cfg.minimum_voidage, 1.0)
-        velocity = np.zeros_like(p.velocity) if self.fixed else p.velocity
-        slip = at_particles[:, 1:] - velocity
+        n = p.count
+        eps_p, slip = slip_at_particles(at_particles, p.velocity, cfg.minimum_voidage, self.fixed, np.empty(n),
+                                        np.empty((n, 3)))
         c, lift, torque = self.model.evaluate(slip, eps_p, p.axis)
         volume_cells = mesh.cell_volumes[:, None]
         explicit_drag = None
@@ -189,7 +184,7 @@ class CouplingBridge:
                 source = scatter(exchanged if lift is None else exchanged - lift)
             else:  # response, coefficient, source and their deposition in one kernel pass
                 t = clock()
-                beta, source = exchange_terms(p.mass, c, velocity, p.contact_force + p.external_force,
+                beta, source = exchange_terms(p.mass, c, p.velocity, p.contact_force + p.external_force,
                                               np.asarray(dem.gravity, float), _NO_LIFT if lift is None else lift,
                                               dem.dt, self.substeps, dt, grid_map.cells, grid_map.weights,
                                               np.zeros(mesh.cell_count), np.zeros((mesh.cell_count, 3)))
@@ -200,28 +195,22 @@ class CouplingBridge:
         t_after_gas = clock()
         fields = [s.flux_velocity()] + ([s.pressure_gradient()] if cfg.pressure_gradient_force else [])
         at_particles = grid_map.gather(np.column_stack(fields))  # one pass for both
-        fluid_velocity = at_particles[:, :3]
-        external = np.zeros_like(slip)
-        volume = self.particle_volume()[:, None]
-        if cfg.pressure_gradient_force:
-            external -= volume * at_particles[:, 3:]
-        if np.any(gas.mean_pressure_gradient):  # an imposed mean gradient acts on both phases
-            external += volume * gas.mean_pressure_gradient
-        pressure_force = external.sum(axis=0)
-        if lift is not None:
-            external += lift
-        if explicit_drag is not None:
-            external += explicit_drag
+        # u at the particles, and -V_p grad p (+ V_p G, an imposed mean gradient acting on both phases)
+        # + lift + explicit drag held over the interval, written straight into the particles' rows
+        fluid_velocity = np.empty((n, 3)) if self.fixed else p.fluid_velocity
+        external = np.empty((n, 3)) if self.fixed else p.external_force
+        pressure_force = particle_forces(at_particles, bool(cfg.pressure_gradient_force), p.radius, p.half_length,
+                                         np.asarray(gas.mean_pressure_gradient, float),
+                                         _NO_LIFT if lift is None else lift,
+                                         _NO_LIFT if explicit_drag is None else explicit_drag, fluid_velocity, external)
         if self.fixed:  # nothing moves: the particles receive the drag at the new gas velocity
             impulse = None if explicit_drag is not None else c[:, None] * fluid_velocity * dt
         else:
-            p.external_force[:] = external
             p.external_torque[:] = 0.0 if torque is None else torque
             if self.rotational_drag:
                 p.external_torque += rotational_drag_torque(p.angular_velocity, p.inertia[:, 0],
                                                             self._rotational_coefficient, dt)
             p.drag_coefficient[:] = c if self.semi_implicit else 0.0
-            p.fluid_velocity[:] = fluid_velocity
             p.drag_impulse[:] = 0.0
             ids_before = p.ids.copy()
             t_dem = clock()
@@ -239,7 +228,7 @@ class CouplingBridge:
             difference = lost - scatter(impulse if lift is None else impulse + lift * dt)
             gas.returned_momentum += difference  # a source of the next gas step
             returned = float(np.abs(difference.sum(axis=0)).max())
-        drag_force = explicit_drag.sum(axis=0) if impulse is None else impulse.sum(axis=0) / dt
+        drag_force = column_sums(explicit_drag) if impulse is None else column_sums(impulse) / dt
         self.last.update(drag_force=drag_force, pressure_force=pressure_force, momentum_returned=returned)
         # closures: before the gas step and after it (interpolation, forces, exchange), less what
         # the deposition and the DEM took

@@ -418,3 +418,72 @@ def sanjeevi_padding_all(slip, voidage, axis, shape, c_out, lift_out, torque_out
         _torque_direction(slip, axis, i, torque_out)
         _scale_row(torque_out, i, magnitude)
     return c_out, lift_out, torque_out
+
+
+# --------------------------------------------------------------------------- the bridge's per-particle glue
+@njit(cache=True, parallel=True)
+def slip_at_particles(at_particles, velocity, minimum_voidage, fixed, voidage_out, slip_out):
+    """From the gathered ``(voidage, u_x, u_y, u_z)`` rows: the voidage clipped to
+    ``[minimum_voidage, 1]`` and the slip ``u - v`` (``u`` itself for fixed particles), written into
+    ``voidage_out`` (N,) and ``slip_out`` (N, 3). The numpy form: ``np.clip(at[:, 0], minimum, 1)``,
+    ``at[:, 1:] - v``."""
+    for i in numba.prange(at_particles.shape[0]):
+        voidage_out[i] = min(max(at_particles[i, 0], minimum_voidage), 1.0)
+        for d in range(3):
+            slip_out[i, d] = at_particles[i, 1 + d] if fixed else at_particles[i, 1 + d] - velocity[i, d]
+    return voidage_out, slip_out
+
+
+@njit(cache=True, parallel=True)
+def particle_forces(at_particles, pressure_gradient_force, radius, half_length, mean_gradient, lift, explicit_drag,
+                    fluid_velocity_out, external_out):
+    """The gas's forces on the particles held over a coupling interval, from the gathered rows
+    ``(u_x, u_y, u_z[, dp/dx, dp/dy, dp/dz])``: ``fluid_velocity_out = u`` and ``external_out =
+    -V_p grad p + V_p G + F_L + F_D,explicit`` (``V_p`` the spherocylinder volume; ``G`` the imposed mean
+    pressure gradient; ``lift`` / ``explicit_drag`` may be (0, 3): none). Returns the pressure part's
+    sum over the particles, ``sum(-V_p grad p + V_p G)`` (3,), summed in fixed particle blocks, so the
+    same on any number of threads."""
+    n = at_particles.shape[0]
+    chunks = SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+    partial = np.zeros((chunks, 3))
+    has_lift = lift.shape[0] == n
+    has_explicit = explicit_drag.shape[0] == n
+    for chunk in numba.prange(chunks):
+        for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
+            r, h = radius[i], half_length[i]
+            volume = np.pi * r ** 2 * 2.0 * h + 4.0 / 3.0 * np.pi * r ** 3
+            for d in range(3):
+                fluid_velocity_out[i, d] = at_particles[i, d]
+                f = 0.0
+                if pressure_gradient_force:
+                    f -= volume * at_particles[i, 3 + d]
+                f += volume * mean_gradient[d]
+                partial[chunk, d] += f
+                if has_lift:
+                    f += lift[i, d]
+                if has_explicit:
+                    f += explicit_drag[i, d]
+                external_out[i, d] = f
+    total = np.zeros(3)
+    for chunk in range(chunks):
+        for d in range(3):
+            total[d] += partial[chunk, d]
+    return total
+
+
+@njit(cache=True, parallel=True)
+def column_sums(values):
+    """``values.sum(axis=0)`` of an (N, 3) array, summed in fixed particle blocks (the same on any number
+    of threads; numpy's strided axis-0 sum cost 0.37 ms on 32,500 rows)."""
+    n = values.shape[0]
+    chunks = SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+    partial = np.zeros((chunks, values.shape[1]))
+    for chunk in numba.prange(chunks):
+        for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
+            for d in range(values.shape[1]):
+                partial[chunk, d] += values[i, d]
+    total = np.zeros(values.shape[1])
+    for chunk in range(chunks):
+        for d in range(values.shape[1]):
+            total[d] += partial[chunk, d]
+    return total

@@ -34,6 +34,8 @@ CG iterations to ``|r| <= 1e-10 |b|``, against 27 without over-correction.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numba import njit
 
@@ -155,34 +157,61 @@ class Hierarchy:
     """The stacked levels of one matrix (``build``); ``arrays()`` are the arguments of ``pcg``. Level
     ``l`` owns entries ``row_start[l]:row_start[l + 1]`` of the stacked ``d, cx, cy, cz``."""
 
-    def __init__(self, shapes, d, cx, cy, cz):
-        sizes = [int(np.prod(s)) for s in shapes]
-        self.row_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-        nx, ny, nz = shapes[-1]
-        dense = _dense_level(d, cx, cy, cz, int(self.row_start[-2]), nx, ny, nz)
-        self._arrays = (self.row_start, np.asarray(shapes, np.int64), d, cx, cy, cz, 1.0 / d, np.linalg.inv(dense))
+    def __init__(self, row_start, shapes, d, cx, cy, cz, inverse, coarse_inverse):
+        self.row_start = row_start
+        self._arrays = (row_start, shapes, d, cx, cy, cz, inverse, coarse_inverse)
 
     def arrays(self):
         return self._arrays
 
 
-def build(d, cx, cy, cz, shape) -> Hierarchy:
-    """Levels of the SPD 7-point operator (diagonal ``d``, couplings ``cx, cy, cz``) on ``shape``."""
+@lru_cache(maxsize=8)
+def _plan(shape):
+    """``(row_start, shapes)`` of the hierarchy of a grid ``shape`` (the same for every matrix on it)."""
     shapes = grid_shapes(shape)
     sizes = [int(np.prod(s)) for s in shapes]
-    total = sum(sizes)
-    stacked = [np.zeros(total) for _ in range(4)]
-    for array, values in zip(stacked, (d, cx, cy, cz)):
-        array[:sizes[0]] = values
-    start = 0
-    for (nx, ny, nz), n, m in zip(shapes[:-1], sizes[:-1], sizes[1:]):
-        fine = [a[start:start + n] for a in stacked]
-        coarse = [a[start + n:start + n + m] for a in stacked]
-        _coarsen(*fine, nx, ny, nz, *coarse)
-        start += n
-    if not np.all(stacked[0] > 0.0):
+    return np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64), np.asarray(shapes, np.int64)
+
+
+@njit(cache=True)
+def _build_levels(d, cx, cy, cz, row_start, shapes):
+    """The stacked levels (fine operator copied, each coarser one its Galerkin product), the inverse
+    diagonal and the coarsest level's dense inverse, in one compiled pass; ``ok`` False when a diagonal
+    entry of any level is not positive (not SPD)."""
+    total = row_start[-1]
+    sd, sx, sy, sz = np.zeros(total), np.zeros(total), np.zeros(total), np.zeros(total)
+    n0 = row_start[1]
+    sd[:n0] = d
+    sx[:n0] = cx
+    sy[:n0] = cy
+    sz[:n0] = cz
+    levels = len(row_start) - 1
+    for level in range(levels - 1):
+        a, b, c = row_start[level], row_start[level + 1], row_start[level + 2]
+        _coarsen(sd[a:b], sx[a:b], sy[a:b], sz[a:b], shapes[level, 0], shapes[level, 1], shapes[level, 2],
+                 sd[b:c], sx[b:c], sy[b:c], sz[b:c])
+    inverse = np.empty(total)
+    ok = True
+    for g in range(total):
+        if not sd[g] > 0.0:
+            ok = False
+            inverse[g] = 0.0
+        else:
+            inverse[g] = 1.0 / sd[g]
+    last = levels - 1
+    dense = _dense_level(sd, sx, sy, sz, row_start[last], shapes[last, 0], shapes[last, 1], shapes[last, 2])
+    coarse_inverse = np.linalg.inv(dense) if ok else dense
+    return ok, sd, sx, sy, sz, inverse, coarse_inverse
+
+
+def build(d, cx, cy, cz, shape) -> Hierarchy:
+    """Levels of the SPD 7-point operator (diagonal ``d``, couplings ``cx, cy, cz``) on ``shape``."""
+    row_start, shapes = _plan(tuple(int(s) for s in shape))
+    ok, *levels = _build_levels(np.ascontiguousarray(d, float), np.ascontiguousarray(cx, float),
+                                np.ascontiguousarray(cy, float), np.ascontiguousarray(cz, float), row_start, shapes)
+    if not ok:
         raise ValueError("multigrid: a non-positive diagonal entry (the matrix is not SPD)")
-    return Hierarchy(shapes, *stacked)
+    return Hierarchy(row_start, shapes, *levels)
 
 
 # The three passes below share their neighbour sum ``s = sum_{n != c} a_cn x_n`` line for line: a
