@@ -105,3 +105,18 @@ def face_pressures(kind, first, second, areas, distances, k_cell, pressure, c_fi
         elif kind[f] == INLET or kind[f] == CLOSED:
             out[f] = pressure[p] + distances[f] * (c_first[f] - fixed_flux[f] / areas[f]) / k_cell[p]
     return out
+
+
+@njit(cache=True)
+def corrected_fluxes(kind, first, second, areas, distances, k_face, flux, correction):
+    """The fluxes after a pressure correction ``p'`` (C,): ``phi - k_f A (p'_N - p'_P) / d`` on interior
+    faces, ``phi - k_f A (0 - p'_P) / d`` on the outlet (``p' = 0`` beyond it), unchanged elsewhere (walls
+    and the inlet carry fixed fluxes). The numpy form: ``flux - k_face A _face_difference(p')``."""
+    out = flux.copy()
+    for f in range(len(kind)):
+        p = first[f]
+        if kind[f] == INTERIOR:
+            out[f] = flux[f] + (-k_face[f] * areas[f]) * ((correction[second[f]] - correction[p]) / distances[f])
+        elif kind[f] == OUTLET:
+            out[f] = flux[f] + (-k_face[f] * areas[f]) * (-correction[p] / distances[f])
+    return out

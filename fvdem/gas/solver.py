@@ -43,7 +43,7 @@ from .mesh import GasMesh, fipy_momentum_system, fipy_pressure_system
 from ..timing import Timings
 from . import multigrid
 from . import face_kernels
-from .face_kernels import face_pressures, gauss_gradient, predicted_fluxes
+from .face_kernels import corrected_fluxes, face_pressures, gauss_gradient, predicted_fluxes
 from .krylov import bicgstab_jacobi
 from .momentum_kernels import MomentumTables
 from .operators import DiffusionOperator, StencilPattern, UpwindConvectionOperator
@@ -513,10 +513,8 @@ class GasSolver:
         else:
             p_corr = self._solve(self._pressure_system(k_face).tocsr(), imbalance, p_corr, symmetric_negative=True,
                                  tolerance=tolerance)
-        flux_corr = -k_face * mesh.face_areas * self._face_difference(p_corr)
-        flux_corr[self._closed] = 0.0
-        flux_corr[self._inlet] = 0.0
-        self.face_flux = flux + flux_corr
+        self.face_flux = corrected_fluxes(self._face_kind, self._face_first, self._face_second, mesh.face_areas,
+                                          mesh.face_distances, k_face, flux, p_corr)
         c_normal = (c_first, c_second)
         corrected = self.pressure + p_corr
         face_p = self._face_pressure(corrected, c_normal, k_cell)
