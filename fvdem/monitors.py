@@ -46,7 +46,7 @@ class RunawayWatch:
         self.warned_about: set = set()  # the warnings given ("cost", "overlap", "outlet"), each once
 
     def cost(self, steps: int, seconds: float) -> None:
-        """Warn once when a chunk's wall time per step exceeds ``RUNAWAY_COST`` times the median of the
+        """Warn once when a chunk's CPU time per step exceeds ``RUNAWAY_COST`` times the median of the
         recent chunks (a jump, not the gradual rise of a bed being poured or fluidized; the first chunk
         holds numba's compilation and is skipped)."""
         if steps <= 0 or seconds <= 0:

@@ -113,6 +113,35 @@ def test_a_step_grown_far_costlier_than_the_recent_ones_is_warned_once():
         sim.watch.cost(100, 3.0)  # once only
 
 
+def test_a_suspended_run_is_not_a_runaway(monkeypatch):
+    """The run's wall clock jumps by an hour between any two readings (the process stopped with SIGSTOP,
+    or the machine asleep): the runaway watch is given each chunk's CPU time, which did not jump, so no step looks
+    costlier (the first session of issue 18's ramps, paused for benchmarks, warned "a step costs 451 x
+    the run's recent typical step")."""
+    import types
+    import fvdem
+    import fvdem.simulation as simulation
+    from fvdem.case import case_from_dict
+    case = case_from_dict({"particles": {"count": 20, "diameter": "5 mm"}, "domain": {"upper": [0.05, 0.05, 0.1]},
+                           "output": {"progress": False, "timeseries_interval": 0.001}, "time": {"end": 1.0}})
+    sim = fvdem.Simulation(case)
+    sim.run(0.005)
+    real = simulation._time
+    calls = {"n": 0}
+
+    def jumping_clock():  # an hour lost between two readings
+        calls["n"] += 1
+        return real.perf_counter() + 3600.0 * calls["n"]
+
+    given = []
+    monkeypatch.setattr(simulation, "_time", types.SimpleNamespace(perf_counter=jumping_clock,
+                                                                   process_time=real.process_time))
+    monkeypatch.setattr(sim.watch, "cost", lambda steps, seconds: given.append(seconds))
+    sim.run(0.02)
+    assert calls["n"] > 20 and len(given) > 10
+    assert max(given) < 60.0  # CPU seconds of a few steps of 20 particles, not the lost hour
+
+
 def test_a_gradual_rise_of_the_cost_is_not_a_runaway():
     """Pouring a bed: contacts form and the cost per step rises 40-fold over the run (issue 15's
     settling of 32,500 rods warned at 36 x its contact-free start); no jump, no warning."""
