@@ -101,8 +101,7 @@ class Simulation:
                 target = min(end_step, self._next_event(step), step + 500)
                 chunk_start = _time.process_time()
                 self.model.advance(target - step)
-                # the process's CPU time, not the wall clock: a run suspended (SIGSTOP, a machine asleep)
-                # or sharing its cores has no costlier steps
+                # CPU time, not wall: a suspended run (SIGSTOP, sleep) or one sharing its cores is no runaway
                 self.watch.cost(target - step, _time.process_time() - chunk_start)
                 if self._stop_file is not None and self._stop_file.exists():
                     self._stop_requested = True
