@@ -108,19 +108,25 @@ def reference_scatter(values, cells, weights, count):
     return out
 
 
+def on_each_thread_count(run):
+    """``run()`` on 1 and on all threads; the results (the numba default restored afterwards)."""
+    before = numba.get_num_threads()
+    try:
+        results = []
+        for threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(threads)
+            results.append(run())
+        return results
+    finally:
+        numba.set_num_threads(before)
+
+
 @pytest.mark.parametrize("n", [3, 1000])
 def test_parallel_scatter_equals_serial_sum_and_is_thread_count_independent(n):
     cells, weights = grid_weights(n, 50, 8)
     values = np.random.default_rng(1).normal(size=(n, 3))
     expected = reference_scatter(values, cells, weights, 50)
-    results = []
-    before = numba.get_num_threads()
-    try:
-        for threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
-            numba.set_num_threads(threads)
-            results.append(scatter(values, cells, weights, np.zeros((50, 3))))
-    finally:
-        numba.set_num_threads(before)
+    results = on_each_thread_count(lambda: scatter(values, cells, weights, np.zeros((50, 3))))
     assert_close(results[0], expected)
     for other in results[1:]:
         assert np.array_equal(other, results[0])  # bit for bit whatever the threads
@@ -163,23 +169,6 @@ def test_fused_set_equals_its_laws_one_by_one(laws):
         law = closures.law(kind, name)
         assert np.array_equal(value, law.evaluate(particle, slip, voidage, axis))  # the same expressions
         assert_close(value, law.function(particle, slip, voidage, axis))
-
-
-def thread_counts():
-    return sorted({1, numba.config.NUMBA_NUM_THREADS})
-
-
-def on_each_thread_count(run):
-    """``run()`` on 1 and on all threads; the results (the numba default restored afterwards)."""
-    before = numba.get_num_threads()
-    try:
-        results = []
-        for threads in thread_counts():
-            numba.set_num_threads(threads)
-            results.append(run())
-        return results
-    finally:
-        numba.set_num_threads(before)
 
 
 @pytest.mark.parametrize("fixed", [False, True])

@@ -129,6 +129,13 @@ def gather(field, cells, weights, out):
 SCATTER_CHUNKS = 4  # particle blocks deposited in parallel, each into its own copy of the cells
 
 
+@njit(cache=True, inline="always")
+def scatter_blocks(n):
+    """The number of fixed particle blocks a race-free deposition or sum over ``n`` particles is cut
+    into: ``SCATTER_CHUNKS``, or one block for a handful of particles."""
+    return SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+
+
 @njit(cache=True, parallel=True)
 def scatter(values, cells, weights, out):
     """``out[cells[i, k]] += weights[i, k] values[i]``: particle values (N, m) to cells (C, m) — the
@@ -138,7 +145,7 @@ def scatter(values, cells, weights, out):
     into its own copy of the cells, and the copies are added in block order, so the result does not
     depend on the number of threads (bit for bit)."""
     n = cells.shape[0]
-    chunks = SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+    chunks = scatter_blocks(n)
     partial = np.zeros((chunks, out.shape[0], out.shape[1]))
     for chunk in numba.prange(chunks):
         block = partial[chunk]

@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from .closures import SANJEEVI_PADDING_DRAG, SANJEEVI_PADDING_TORQUE, ZASTAWNY_LIFT, ZASTAWNY_TORQUE
-from .interpolation import SCATTER_CHUNKS
+from .interpolation import scatter_blocks
 
 RE_FLOOR = 1e-12  # as closures._slip_state: finite coefficients (and zero force) at zero slip
 
@@ -354,7 +354,7 @@ def exchange_terms(mass, c, velocity, force, gravity, lift, substep, substeps, d
     Race-free like ``interpolation.scatter``: fixed particle blocks into private copies, added in
     block order."""
     n = cells.shape[0]
-    chunks = SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+    chunks = scatter_blocks(n)
     ncell = beta_out.shape[0]
     partial = np.zeros((chunks, ncell, 4))
     has_lift = lift.shape[0] == n
@@ -434,6 +434,16 @@ def slip_at_particles(at_particles, velocity, minimum_voidage, fixed, voidage_ou
     return voidage_out, slip_out
 
 
+@njit(cache=True, inline="always")
+def _sum_blocks(partial):
+    """The rows of the per-block partial sums ``partial`` (blocks, k) added in block order (k,)."""
+    total = np.zeros(partial.shape[1])
+    for chunk in range(partial.shape[0]):
+        for d in range(partial.shape[1]):
+            total[d] += partial[chunk, d]
+    return total
+
+
 @njit(cache=True, parallel=True)
 def particle_forces(at_particles, pressure_gradient_force, radius, half_length, mean_gradient, lift, explicit_drag,
                     fluid_velocity_out, external_out):
@@ -444,7 +454,7 @@ def particle_forces(at_particles, pressure_gradient_force, radius, half_length, 
     sum over the particles, ``sum(-V_p grad p + V_p G)`` (3,), summed in fixed particle blocks, so the
     same on any number of threads."""
     n = at_particles.shape[0]
-    chunks = SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+    chunks = scatter_blocks(n)
     partial = np.zeros((chunks, 3))
     has_lift = lift.shape[0] == n
     has_explicit = explicit_drag.shape[0] == n
@@ -464,11 +474,7 @@ def particle_forces(at_particles, pressure_gradient_force, radius, half_length, 
                 if has_explicit:
                     f += explicit_drag[i, d]
                 external_out[i, d] = f
-    total = np.zeros(3)
-    for chunk in range(chunks):
-        for d in range(3):
-            total[d] += partial[chunk, d]
-    return total
+    return _sum_blocks(partial)
 
 
 @njit(cache=True, parallel=True)
@@ -476,14 +482,10 @@ def column_sums(values):
     """``values.sum(axis=0)`` of an (N, 3) array, summed in fixed particle blocks (the same on any number
     of threads; numpy's strided axis-0 sum cost 0.37 ms on 32,500 rows)."""
     n = values.shape[0]
-    chunks = SCATTER_CHUNKS if n >= 4 * SCATTER_CHUNKS else 1
+    chunks = scatter_blocks(n)
     partial = np.zeros((chunks, values.shape[1]))
     for chunk in numba.prange(chunks):
         for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
             for d in range(values.shape[1]):
                 partial[chunk, d] += values[i, d]
-    total = np.zeros(values.shape[1])
-    for chunk in range(chunks):
-        for d in range(values.shape[1]):
-            total[d] += partial[chunk, d]
-    return total
+    return _sum_blocks(partial)
