@@ -12,6 +12,12 @@ Per variant (a case file and contact/step settings):
 - ``coupling_overhead`` = coupled wall / DEM-only wall;
 - ``threads_speedup`` = coupled wall at 1 thread / at ``--threads`` (null when only 1 is available).
 
+The three runs of a variant (coupled, DEM alone, coupled on 1 thread) are repeated ``--repeat`` times
+(default 3), alternated, each from the case's start: the figures above are the medians of the rounds,
+and ``rounds`` keeps each round's wall times and ratios. A single round of the default 0.02 s window
+(40 CFD steps at the defaults) once read an overhead of 2.08 and a 2-thread speedup of 1.04 where the
+next two read 1.41-1.45 and 1.45-1.46 (docs/benchmarks.md): one round is not a measurement.
+
 Each run starts from the case's initial state (the paper cases read the settled beds: run
 ``fvdem run cases/bed_ar1.toml --out runs/bed_ar1`` and ``cases/bed_ar4.toml`` first), takes a short
 warm-up (kernels loaded, first neighbour list built) and measures ``--duration`` simulated seconds of
@@ -26,6 +32,7 @@ import platform
 import time
 
 import numba
+import numpy as np
 
 import fvdem
 
@@ -58,25 +65,55 @@ def measure(case_path, overrides, duration, threads):
             "timings": phases}
 
 
-def variant(name, duration, threads):
+def variant(name, duration, threads, repeat=3):
+    """The variant's figures: medians over ``repeat`` alternated rounds of the coupled run, the DEM alone
+    and the coupled run on 1 thread, with each round's figures in ``rounds``."""
     case_path, overrides = VARIANTS[name]
-    coupled = measure(case_path, overrides, duration, threads)
-    dem = measure(case_path, dict(overrides, **{"gas.enabled": False}), duration, threads)
-    single = None
-    if coupled["threads"] > 1:
-        single = measure(case_path, overrides, duration, 1)["wall_seconds_per_simulated_second"]
-    wall = coupled["wall_seconds_per_simulated_second"]
-    return {"case": case_path, "settings": overrides, "wall_seconds_per_simulated_second": wall,
-            "cpu_seconds_per_simulated_second": coupled["cpu_seconds_per_simulated_second"],
-            "dem_only_wall_seconds_per_simulated_second": dem["wall_seconds_per_simulated_second"],
-            "coupling_overhead": wall / dem["wall_seconds_per_simulated_second"],
-            "threads": coupled["threads"], "threads_speedup": None if single is None else single / wall,
+    rounds = []
+    for _ in range(repeat):
+        coupled = measure(case_path, overrides, duration, threads)
+        dem = measure(case_path, dict(overrides, **{"gas.enabled": False}), duration, threads)
+        single = None
+        if coupled["threads"] > 1:
+            single = measure(case_path, overrides, duration, 1)["wall_seconds_per_simulated_second"]
+        wall = coupled["wall_seconds_per_simulated_second"]
+        dem_wall = dem["wall_seconds_per_simulated_second"]
+        rounds.append({"coupled": coupled, "dem": dem, "wall": wall, "dem_wall": dem_wall, "single": single,
+                       "coupling_overhead": wall / dem_wall,
+                       "threads_speedup": None if single is None else single / wall})
+
+    def median(values):
+        return float(np.median(values))
+
+    def median_phases(key):
+        return {phase: median([r[key]["timings"][phase] for r in rounds]) for phase in rounds[0][key]["timings"]}
+
+    timings = median_phases("coupled")
+    single = None if rounds[0]["single"] is None else median([r["single"] for r in rounds])
+    return {"case": case_path, "settings": overrides,
+            "wall_seconds_per_simulated_second": median([r["wall"] for r in rounds]),
+            "cpu_seconds_per_simulated_second": median([r["coupled"]["cpu_seconds_per_simulated_second"]
+                                                        for r in rounds]),
+            "dem_only_wall_seconds_per_simulated_second": median([r["dem_wall"] for r in rounds]),
+            "coupling_overhead": median([r["coupling_overhead"] for r in rounds]),
+            "threads": rounds[0]["coupled"]["threads"],
+            "threads_speedup": None if single is None else median([r["threads_speedup"] for r in rounds]),
             "one_thread_wall_seconds_per_simulated_second": single,
-            "gas_over_dem": (sum(coupled["timings"][p] for p in ("gas_momentum", "gas_pressure", "gas_other"))
-                             / max(1e-30, sum(coupled["timings"][p] for p in
-                                              ("neighbour_list", "contact_forces", "integration")))),
-            "particles": coupled["particles"], "simulated_seconds": coupled["simulated_seconds"],
-            "timings": coupled["timings"], "dem_only_timings": dem["timings"]}
+            "gas_over_dem": (sum(timings[p] for p in ("gas_momentum", "gas_pressure", "gas_other"))
+                             / max(1e-30, sum(timings[p] for p in ("neighbour_list", "contact_forces", "integration")))),
+            "particles": rounds[0]["coupled"]["particles"], "simulated_seconds": rounds[0]["coupled"]["simulated_seconds"],
+            "timings": timings, "dem_only_timings": median_phases("dem"),
+            "rounds": [{"wall_seconds_per_simulated_second": r["wall"],
+                        "dem_only_wall_seconds_per_simulated_second": r["dem_wall"],
+                        "one_thread_wall_seconds_per_simulated_second": r["single"],
+                        "coupling_overhead": r["coupling_overhead"], "threads_speedup": r["threads_speedup"]}
+                       for r in rounds]}
+
+
+def _spread(result, key):
+    """A figure's range over the rounds, as text."""
+    values = [r[key] for r in result["rounds"]]
+    return f"{min(values):.2f}-{max(values):.2f}"
 
 
 def main(argv=None):
@@ -85,15 +122,20 @@ def main(argv=None):
                         choices=list(VARIANTS))
     parser.add_argument("--duration", type=float, default=0.02, help="simulated seconds per measurement")
     parser.add_argument("--threads", type=int, default=0, help="numba threads (0: all)")
+    parser.add_argument("--repeat", type=int, default=3, help="alternated rounds per variant (medians reported)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
+    if args.repeat < 1 or args.duration <= 0.0:
+        parser.error(f"--repeat must be at least 1 (got {args.repeat}) and --duration positive (got {args.duration})")
     results = {}
     for name in args.variants:
-        r = results[name] = variant(name, args.duration, args.threads)
+        r = results[name] = variant(name, args.duration, args.threads, args.repeat)
         print(f"{name:15s} {r['wall_seconds_per_simulated_second']:8.1f} s wall per simulated s; DEM alone "
-              f"{r['dem_only_wall_seconds_per_simulated_second']:.1f}; coupling overhead {r['coupling_overhead']:.2f}; "
+              f"{r['dem_only_wall_seconds_per_simulated_second']:.1f}; coupling overhead {r['coupling_overhead']:.2f} "
+              f"({_spread(r, 'coupling_overhead')}); "
               f"gas / DEM {r['gas_over_dem']:.2f}; {r['threads']} threads "
-              + (f"{r['threads_speedup']:.2f} x one" if r["threads_speedup"] else ""), flush=True)
+              + (f"{r['threads_speedup']:.2f} x one ({_spread(r, 'threads_speedup')})" if r["threads_speedup"] else "")
+              + f"; medians of {len(r['rounds'])} rounds", flush=True)
     out = {"variants": results, "date": time.strftime("%Y-%m-%d %H:%M"), "load_average": os.getloadavg(),
            "cpu": platform.processor() or platform.machine(), "threads_available": numba.config.NUMBA_NUM_THREADS}
     print(json.dumps(out) if args.json else json.dumps(out, indent=2))
