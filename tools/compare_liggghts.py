@@ -35,6 +35,17 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
 
 
+def settled_sphere_bed(state: Path):
+    """``(case, DEMSystem)`` of ``cases/bed_ar1.toml`` holding the settled bed saved in ``state``."""
+    import fvdem
+    from fvdem.dem.particles import ParticleArrays
+    from fvdem.model import build_dem
+    case = fvdem.load_case(ROOT / "cases" / "bed_ar1.toml")
+    with np.load(state) as data:
+        particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
+    return case, build_dem(case, particles)
+
+
 def write_data(path: Path, particles, lower, upper) -> None:
     """A LIGGGHTS ``read_data`` file for ``atom_style granular``: id type diameter density x y z, and
     the velocities (v, omega)."""
@@ -143,17 +154,12 @@ def main(argv=None) -> int:
     parser.add_argument("--keep", type=Path, help="write the LIGGGHTS data, input and logs here")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    import fvdem
-    from fvdem.dem.particles import ParticleArrays
-    from fvdem.model import build_dem
     if not args.state.exists():
         print(f"compare_liggghts: {args.state} is missing: run fvdem run cases/bed_ar1.toml --out runs/bed_ar1 first",
               file=sys.stderr)
         return 2
-    case = fvdem.load_case(ROOT / "cases" / "bed_ar1.toml")
-    with np.load(args.state) as data:
-        particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
-    dem = build_dem(case, particles)
+    case, dem = settled_sphere_bed(args.state)
+    particles = dem.particles
     result = {"bed": str(args.state), "particles": particles.count, "steps": args.steps,
               "dem_step": case.time.dem_step, "normal_stiffness": case.contact.normal_stiffness}
     executable = shutil.which(args.liggghts)

@@ -39,19 +39,26 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tools"))
 
 # Row i's pairs, as fvdem/dem/forces.py (_sphere_row) and fvdem/dem/contact_law.py (contact_force) compute
 # them for identical spheres (the pair constants precomputed) in a box without periodic axes.
-SCALAR = r"""
+# Both ports' signature (the arrays of fvdem's kernel, C order) and the contact law's constants.
+PROLOGUE = r"""
 #include <math.h>
 #include <stdint.h>
-void pair_loop(int64_t n, const double *restrict pos, const double *restrict vel, const double *restrict w,
-    const double *restrict radius, const int64_t *restrict row_start, const int32_t *restrict nb,
-    double *restrict hist, double *restrict force, double *restrict torque, const double *restrict law,
-    const double *restrict uni)
+#define PAIR_LOOP void pair_loop(int64_t n, const double *restrict pos, const double *restrict vel, \
+    const double *restrict w, const double *restrict radius, const int64_t *restrict row_start, \
+    const int32_t *restrict nb, double *restrict hist, double *restrict force, double *restrict torque, \
+    const double *restrict law, const double *restrict uni)
+#define LAW_CONSTANTS double k_n = law[0], k_t = law[1], inv_k_t = law[2], eta_t_ratio = law[3], mu = law[4], \
+    mu_r = law[5], dt = law[6], inv_dt = law[7], eta_n = uni[0], r_eff = uni[1], inertia_eff = uni[2];
+"""
+
+SCALAR = PROLOGUE + r"""
+PAIR_LOOP
 {
-    double k_n = law[0], k_t = law[1], inv_k_t = law[2], eta_t_ratio = law[3], mu = law[4], mu_r = law[5];
-    double dt = law[6], inv_dt = law[7], eta_n = uni[0], r_eff = uni[1], inertia_eff = uni[2];
+    LAW_CONSTANTS
     for (int64_t i = 0; i < 3 * n; i++) { force[i] = 0.0; torque[i] = 0.0; }
     for (int64_t i = 0; i < n; i++) {
         double px = pos[3*i], py = pos[3*i+1], pz = pos[3*i+2], ri = radius[i];
@@ -104,9 +111,7 @@ void pair_loop(int64_t n, const double *restrict pos, const double *restrict vel
 
 # The same pairs, with the law over batches of gathered pairs (branch-free: every branch computed, then
 # selected), so that it vectorizes across pairs.
-BATCHED = r"""
-#include <math.h>
-#include <stdint.h>
+BATCHED = PROLOGUE + r"""
 #define B 256
 #define L (B + 40)  /* not a power of two: the batch's arrays must not share their low address bits (4K aliasing) */
 #define SEL(c, a, b) ((c) ? (a) : (b))
@@ -114,13 +119,9 @@ static double dx_[L], dy_[L], dz_[L], d2_[L], ri_[L], rj_[L], vx_[L], vy_[L], vz
 static double b0_[L], b1_[L], b2_[L], h0_[L], h1_[L], h2_[L], h3_[L], fx_[L], fy_[L], fz_[L];
 static double ti0_[L], ti1_[L], ti2_[L], tj0_[L], tj1_[L], tj2_[L];
 static int64_t sl_[L], ii_[L], jj_[L];
-void pair_loop(int64_t n, const double *restrict pos, const double *restrict vel, const double *restrict w,
-    const double *restrict radius, const int64_t *restrict row_start, const int32_t *restrict nb,
-    double *restrict hist, double *restrict force, double *restrict torque, const double *restrict law,
-    const double *restrict uni)
+PAIR_LOOP
 {
-    double k_n = law[0], k_t = law[1], inv_k_t = law[2], eta_t_ratio = law[3], mu = law[4], mu_r = law[5];
-    double dt = law[6], inv_dt = law[7], eta_n = uni[0], r_eff = uni[1], inertia_eff = uni[2];
+    LAW_CONSTANTS
     double eta_t = eta_n*eta_t_ratio, cap = inertia_eff*inv_dt;
     for (int64_t i = 0; i < 3 * n; i++) { force[i] = 0.0; torque[i] = 0.0; }
     int64_t i = 0;
@@ -291,14 +292,9 @@ def main() -> int:
         return 2
     import numba
 
-    import fvdem
-    from fvdem.dem.particles import ParticleArrays
-    from fvdem.model import build_dem
+    from compare_liggghts import settled_sphere_bed
 
-    case = fvdem.load_case(ROOT / "cases" / "bed_ar1.toml")
-    with np.load(args.state) as data:
-        particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
-    dem = build_dem(case, particles)
+    dem = settled_sphere_bed(args.state)[1]
     dem.step(20)  # lists built, histories of a running bed
     result = measure(dem, args.calls, args.rounds)
     n = dem.particles.count
