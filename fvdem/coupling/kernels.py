@@ -23,6 +23,7 @@ import numba
 import numpy as np
 from numba import njit
 
+from ..dem.particles import spherocylinder_volume
 from .closures import SANJEEVI_PADDING_DRAG, SANJEEVI_PADDING_TORQUE, ZASTAWNY_LIFT, ZASTAWNY_TORQUE
 from .interpolation import scatter_blocks
 
@@ -460,8 +461,7 @@ def particle_forces(at_particles, pressure_gradient_force, radius, half_length, 
     has_explicit = explicit_drag.shape[0] == n
     for chunk in numba.prange(chunks):
         for i in range(chunk * n // chunks, (chunk + 1) * n // chunks):
-            r, h = radius[i], half_length[i]
-            volume = np.pi * r ** 2 * 2.0 * h + 4.0 / 3.0 * np.pi * r ** 3
+            volume = spherocylinder_volume(radius[i], half_length[i])
             for d in range(3):
                 fluid_velocity_out[i, d] = at_particles[i, d]
                 f = 0.0

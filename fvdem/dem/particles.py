@@ -13,6 +13,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 from numba import njit, prange
+from numba.extending import register_jitable
 
 FLOAT = np.float64
 
@@ -26,9 +27,10 @@ def gather_rows(source, order, destination):
             destination[k, c] = source[o, c]
 
 
+@register_jitable
 def spherocylinder_volume(radius, half_length):
     """Volume [m^3] of a spherocylinder with cylinder radius ``radius`` [m] and
-    cylindrical part of length ``2*half_length`` [m] (caps excluded)."""
+    cylindrical part of length ``2*half_length`` [m] (caps excluded). Callable from kernels too."""
     return np.pi * radius**2 * 2.0 * half_length + 4.0 / 3.0 * np.pi * radius**3
 
 
