@@ -5,7 +5,7 @@ them start from, the axes to vary, exclusions, the duration and replicas::
 
     name = "smoke"
     duration = 0.04                    # simulated seconds of every run (time.end)
-    replicas = 1                       # repeats with other insertion seeds (particles.insertion.seed)
+    replicas = 1                       # repeats, each from its own bed (insertion seed + k - 1)
     [settings]                         # for every run and bed
     "output.vtk" = false
     [beds.small]                       # prepared once, before the runs that start from it
@@ -74,6 +74,7 @@ class RunSpec:
     bed: str | None = None  # name of the bed it starts from
     point: dict = field(default_factory=dict)  # the axes' values of this run
     duration: float = 0.0  # simulated seconds (the study's, or its family's own)
+    replica: int = 1  # 1, 2, ...: replica k >= 2 starts from its own bed (insertion seed + k - 1)
 
 
 @dataclass(frozen=True)
@@ -134,10 +135,10 @@ def load_study(path, out) -> Study:
         if not isinstance(spec, dict) or "case" not in spec:
             _problem(problems, f"{kind}.{key}", spec, "a table with case = 'path of a case file'")
             return None, {}
-        unknown = set(spec) - {"case", "set"} - ({"bed", "duration"} if kind == "families" else set())
+        unknown = set(spec) - {"case", "set"} - ({"bed", "duration", "replicas"} if kind == "families" else set())
         for k in sorted(unknown):
             _problem(problems, f"{kind}.{key}.{k}", spec[k], "unknown key; allowed: case, set" +
-                     (", bed, duration" if kind == "families" else ""))
+                     (", bed, duration, replicas" if kind == "families" else ""))
         case_path = (base / spec["case"]).resolve()
         if not case_path.is_file():
             _problem(problems, f"{kind}.{key}.case", spec["case"], f"no such case file ({case_path})")
@@ -153,6 +154,29 @@ def load_study(path, out) -> Study:
         if case_path:
             beds.append(BedSpec(key, case_path, {**settings, **sets}, str(out / "beds" / key)))
     bed_names = {b.name for b in beds}
+    replica_beds: dict[tuple, str] = {}  # (bed, replica) -> the name of that replica's own bed
+
+    def replica_bed(bed_name, replica):
+        """Replica k >= 2 of a run that starts from a bed starts from its own bed, settled like the first
+        but with insertion seed (the bed's seed + k - 1): another realization of the same packing, so
+        replicas differ from the first step (a replica from one settled bed would be a bit-for-bit copy)."""
+        if replica == 1 or bed_name not in bed_names:
+            return bed_name
+        if (bed_name, replica) not in replica_beds:
+            first = next(b for b in beds if b.name == bed_name)
+            try:
+                seed = int(load_case(first.case, dict(first.overrides)).particles.insertion.seed)
+            except CaseError:
+                seed = 1  # the bed's own problems are reported below
+            name = f"{bed_name}_r{replica}"
+            if name in bed_names:
+                _problem(problems, f"beds.{name}", "...", f"a bed name that replica {replica} of bed {bed_name} "
+                         "needs for its own settled bed; rename it")
+            overrides = {**first.overrides, "particles.insertion.seed": seed + replica - 1}
+            beds.append(BedSpec(name, first.case, overrides, str(out / "beds" / name)))
+            replica_beds[(bed_name, replica)] = name
+        return replica_beds[(bed_name, replica)]
+
     exclusions = table.get("exclude", [])
     if not isinstance(exclusions, list) or not all(isinstance(e, dict) for e in exclusions):
         _problem(problems, "exclude", exclusions, "a list of tables ([[exclude]] with family and axis values)")
@@ -171,20 +195,25 @@ def load_study(path, out) -> Study:
             family_duration = duration
         if bed is not None and bed not in bed_names:
             _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+        family_replicas = spec.get("replicas", replicas)
+        if not isinstance(family_replicas, int) or isinstance(family_replicas, bool) or not 1 <= family_replicas <= 1000:
+            _problem(problems, f"families.{family}.replicas", family_replicas, "an integer 1-1000")
+            family_replicas = 1
         for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
             point = dict(zip(names, values))
             if any(all((family if k == "family" else point.get(k)) == v for k, v in e.items()) for e in exclusions):
                 continue
-            for replica in range(1, replicas + 1):
+            for replica in range(1, family_replicas + 1):
                 label = "_".join(f"{k.split('.')[-1]}{v:g}" if isinstance(v, (int, float)) else f"{k.split('.')[-1]}{v}"
                                  for k, v in point.items())
-                run_name = "_".join(x for x in (family, label, f"r{replica}" if replicas > 1 else "") if x)
+                run_name = "_".join(x for x in (family, label, f"r{replica}" if family_replicas > 1 else "") if x)
                 run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
                 overrides = {**settings, **sets, **point, "time.end": run_duration}
-                if replicas > 1:
+                if family_replicas > 1 and bed is None:  # a run that inserts its own particles
                     overrides["particles.insertion.seed"] = replica
-                runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name), bed, point,
-                                    run_duration))
+                runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name),
+                                    replica_bed(bed, replica) if bed is not None else None, point, run_duration,
+                                    replica))
     cluster = _table(table, "cluster", problems)
     kind = cluster.get("kind", "local")
     if kind not in CLUSTER_KINDS:

@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -495,3 +496,61 @@ def test_a_slurm_cluster_table_submits_one_job_per_worker_with_the_runs_threads_
     with pytest.raises(CaseError) as err:
         make_client({"kind": "slurm", "memory": "1GB", "partitionz": "x"}, None, None, threads=1)
     assert "partitionz" in str(err.value)
+
+
+def test_replicas_start_from_their_own_settled_beds_differ_and_a_resumed_replica_is_itself(tmp_path):
+    """Replica k >= 2 of a run that starts from a bed starts from its own bed, settled with insertion seed
+    (the bed's + k - 1): the replicas differ from the first step (from one bed they would be bit-for-bit
+    copies), and a replica stopped mid-run and resumed ends bit-for-bit where it ends uninterrupted."""
+    import numpy as np
+
+    from fvdem.study import prepare_bed
+    text = SMOKE.read_text().replace("replicas = 1", "replicas = 2").replace('"../cases/', f'"{ROOT / "cases"}/')
+    path = tmp_path / "replicas.toml"
+    path.write_text(text.replace('"time.end" = 0.03', '"time.end" = 0.01'))
+    study = load_study(path, tmp_path / "out")
+    assert [b.name for b in study.beds] == ["small", "small_r2"]
+    assert study.beds[1].overrides["particles.insertion.seed"] == 2 and "particles.insertion.seed" not in study.beds[0].overrides
+    assert [(r.name, r.bed, r.replica) for r in study.runs] == [
+        ("ar1_u_over_umf2_r1", "small", 1), ("ar1_u_over_umf2_r2", "small_r2", 2),
+        ("ar1_u_over_umf2.9_r1", "small", 1), ("ar1_u_over_umf2.9_r2", "small_r2", 2)]
+    states = {b.name: prepare_bed(b, 1) for b in study.beds}
+    with np.load(states["small"]) as a, np.load(states["small_r2"]) as b:
+        assert a["position"].shape == b["position"].shape and np.abs(a["position"] - b["position"]).max() > 1e-3
+    first, second = study.runs[0], study.runs[1]
+    results = [run_task(r, 1, states[r.bed]) for r in (first, second)]
+    assert all(r["status"] == "finished" for r in results)
+    with np.load(Path(first.folder) / "final_state.npz") as a, np.load(Path(second.folder) / "final_state.npz") as b:
+        assert not np.array_equal(a["position"], b["position"])
+    # replica 2 again, stopped after its first chunk past 0.006 s and resumed
+    import fvdem.simulation as simulation
+    again = replace(second, folder=str(tmp_path / "out" / "runs" / "again"))
+    original = simulation.Model.advance
+
+    def advance_then_stop(self, steps):
+        original(self, steps)
+        if self.time >= 0.006:
+            request_stop(tmp_path / "out")
+    simulation.Model.advance = advance_then_stop
+    try:
+        assert run_task(again, 1, states[again.bed])["status"] == "stopped"
+    finally:
+        simulation.Model.advance = original
+    (tmp_path / "out" / STOP_FILE).unlink()
+    assert run_task(again, 1, states[again.bed])["status"] == "resumed"
+    with np.load(Path(second.folder) / "final_state.npz") as a, np.load(Path(again.folder) / "final_state.npz") as b:
+        for key in a.files:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_a_familys_own_replicas_and_a_wrong_count(tmp_path):
+    text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+    path = tmp_path / "study.toml"
+    path.write_text(text.replace('bed = "small"', 'bed = "small"\nreplicas = 3', 1))
+    study = load_study(path, tmp_path / "out")
+    assert [r.name for r in study.runs][:3] == ["ar1_u_over_umf2_r1", "ar1_u_over_umf2_r2", "ar1_u_over_umf2_r3"]
+    assert [b.name for b in study.beds] == ["small", "small_r2", "small_r3"]
+    path.write_text(text.replace('bed = "small"', 'bed = "small"\nreplicas = 0', 1))
+    with pytest.raises(CaseError) as err:
+        load_study(path, tmp_path / "out")
+    assert "families.ar1.replicas = 0" in str(err.value)
