@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import warnings
 from pathlib import Path
 
 from .case import CaseError, load_case, parse_override, schema_reference
@@ -72,7 +74,8 @@ def cmd_run(args) -> int:
     from .timing import format_table
     print(format_table(summary["timings"], summary["threads"], summary["steps"], summary["simulated_time"]))
     keys = ("simulated_time", "steps", "wall_seconds", "bed_height", "solids_fraction", "contacts_per_particle",
-            "max_overlap_over_diameter", "porous_zone_pressure_gradient", "expected_pressure_gradient")
+            "max_overlap_over_diameter", "t95", "pressure_drop_over_weight", "porous_zone_pressure_gradient",
+            "expected_pressure_gradient")
     print(json.dumps({k: round(summary[k], 12) if isinstance(summary[k], float) else summary[k]
                       for k in keys if k in summary}))
     views = " and ".join(name for name in ("particles.pvd", "gas.pvd") if (out / name).exists())
@@ -128,8 +131,6 @@ def cmd_study(args) -> int:
         return 0
     if not args.out:
         return _fail("fvdem study STUDY.toml needs --out DIR (or: fvdem study DIR --report)")
-    if args.threads_per_worker < 1:
-        return _fail(f"--threads-per-worker {args.threads_per_worker}: at least 1")
     study = select_runs(load_study(target, args.out), args.only)
     log = (lambda line: print(line, file=sys.stderr, flush=True))
     durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
@@ -141,6 +142,8 @@ def cmd_study(args) -> int:
     failed = [r for r in result["runs"] if r["status"] == "failed"]
     for r in failed:
         log(f"failed: {r['name']}: {r['error']}")
+        for line in r.get("log_tail") or []:  # the last lines of the run's run.log
+            log(f"  {r['name']} run.log: {line}")
     stopped = [r["name"] for r in result["runs"] if r["status"] == "stopped"]
     if result.get("stopped"):
         log(f"stopped: {len(stopped)} run(s) checkpointed or not started ({', '.join(stopped)}); the same command "
@@ -205,35 +208,88 @@ def cmd_schema(args) -> int:
     return 0
 
 
+def cores() -> int:
+    """The CPUs this process may run on (its affinity; a SLURM job's allocation, not the node's)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def thread_count(text: str) -> int:
+    """An argparse type: a thread count 1..cores (a wrong one ends with exit code 2 and the range)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: a whole number of threads, 1-{cores()}") from None
+    if not 1 <= value <= cores():
+        raise argparse.ArgumentTypeError(f"{value}: allowed 1-{cores()} (the CPUs this process may use)")
+    return value
+
+
+def positive_count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: a whole number, at least 1")
+    return value
+
+
+def version_text() -> str:
+    from . import __version__
+    from .provenance import source_commit
+    commit = source_commit()
+    return f"fvdem {__version__}" + (f" (commit {commit})" if commit else "")
+
+
+class _Version(argparse.Action):
+    """``--version``: the version text is made only when asked (the commit costs a git call)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(version_text())
+        parser.exit()
+
+
+SET_HELP = "override a case value, e.g. --set particles.count=5000 (repeat for several; keys: fvdem schema)"
+
+
 def make_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fvdem", description="CFD-DEM for fluidized beds")
+    parser.add_argument("--version", action=_Version, nargs=0,
+                        help="the fvdem version (and git commit of a source checkout), then exit")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a case file")
-    run.add_argument("case")
+    run.add_argument("case", help="the case file (TOML; cases/ has examples)")
     run.add_argument("--out", help="output folder (default runs/<case name>)")
     run.add_argument("--overwrite", action="store_true", help="replace an existing non-empty output folder")
     run.add_argument("--resume", action="store_true", help="continue from the output folder's checkpoint")
-    run.add_argument("--threads", type=int, help="numba threads (default: case run.threads)")
-    run.add_argument("--no-progress", action="store_true")
-    run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case value")
+    run.add_argument("--threads", type=thread_count, help="numba threads, 1 to the CPUs available "
+                                                          "(default: case run.threads, 0 there meaning all)")
+    run.add_argument("--no-progress", action="store_true",
+                     help="no progress bar or progress lines on standard error (run.log keeps its lines)")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE", help=SET_HELP)
     run.set_defaults(func=cmd_run)
     check = sub.add_parser("check", help="validate a case file without running it")
-    check.add_argument("case")
-    check.add_argument("--set", action="append", metavar="KEY=VALUE")
+    check.add_argument("case", help="the case file (TOML)")
+    check.add_argument("--set", action="append", metavar="KEY=VALUE", help=SET_HELP)
     check.set_defaults(func=cmd_check)
     report = sub.add_parser("report", help="write PNG plots for a run folder")
-    report.add_argument("out")
+    report.add_argument("out", help="a run folder (the --out of fvdem run); the plots are written into it")
     report.set_defaults(func=cmd_report)
     compare = sub.add_parser("compare", help="several runs on one chart: mixing entropy against time and "
                                              "t95 against U/Umf (seed 000 Figs. 2-4)")
-    compare.add_argument("runs", nargs="+")
+    compare.add_argument("runs", nargs="+", help="run folders")
     compare.add_argument("--out", default=".", help="folder for mixing_compare.png and t95.png")
     compare.set_defaults(func=cmd_compare)
     study = sub.add_parser("study", help="run a study file's runs on Dask (or --report a study folder)")
     study.add_argument("study", help="a study file (studies/*.toml), or a study folder with --report")
     study.add_argument("--out", help="study folder (runs/, beds/, study.json, the report)")
-    study.add_argument("--workers", type=int, help="LocalCluster worker processes (default: cores / threads)")
-    study.add_argument("--threads-per-worker", type=int, default=1, help="numba threads of each run")
+    study.add_argument("--workers", type=positive_count,
+                       help="LocalCluster worker processes (default: cores / threads)")
+    study.add_argument("--threads-per-worker", type=positive_count, default=1,
+                       help="numba threads of each run (default 1)")
     study.add_argument("--scheduler", help="address of a running Dask scheduler (instead of a LocalCluster)")
     study.add_argument("--report", action="store_true", help="only write the report of a study folder")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
@@ -246,18 +302,42 @@ def make_parser() -> argparse.ArgumentParser:
     schema.add_argument("--docs", action="store_true", help="the form of docs/case-reference.md (registries by name)")
     schema.set_defaults(func=cmd_schema)
     laws = sub.add_parser("laws", help="list the registered closures, voidage methods and scenes")
-    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes"))
+    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes"),
+                      help="only this registry (default: all)")
     laws.add_argument("--json", action="store_true", help="one JSON object")
     laws.set_defaults(func=cmd_laws)
     return parser
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A warning on standard error as one readable line (not Python's file:line and source line)."""
+    from .io.run_log import warning_line
+    try:
+        print(f"fvdem: {warning_line(message, category)}", file=sys.stderr, flush=True)
+    except (OSError, ValueError):  # standard error closed
+        pass
+
+
+def _quiet_after_broken_pipe() -> int:
+    """The reader of standard output went away (``fvdem schema | head``): end quietly with exit 0, with
+    standard output pointed at /dev/null so the interpreter's last flush does not complain."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+    return 0
 
 
 def main(argv=None) -> int:
     from .io.run_folder import OutputError
     from .dem.system import SimulationError
     args = make_parser().parse_args(argv)
+    warnings.showwarning = _show_warning
     try:
         return args.func(args)
+    except BrokenPipeError:
+        return _quiet_after_broken_pipe()
     except CaseError as exc:
         if len(exc.problems) == 1:
             return _fail(f"invalid case: {exc.problems[0]}")

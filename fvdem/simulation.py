@@ -7,6 +7,7 @@ Writers only read the state, so a run resumed from a checkpoint continues bit-fo
 """
 from __future__ import annotations
 
+import contextlib
 import signal
 import time as _time
 from dataclasses import asdict
@@ -17,9 +18,11 @@ from .dem.system import SimulationError
 from .io.checkpoint import load_checkpoint
 from .io.run_folder import (CHECKPOINT, OutputError, RunState, Schedule, check_resumable, prepare_output,
                             write_checkpoint, write_final, write_snapshot)
+from .io.run_log import RunLog
 from .io.timeseries import TimeseriesWriter
 from .model import Model, build_dem, build_particles, load_initial_state, set_threads
 from .monitors import RunawayWatch
+from .provenance import describe, provenance
 from .scenes import scene_for
 from .timing import Timings
 
@@ -46,8 +49,22 @@ class Simulation:
         self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
         if resume and self.out is not None:
             check_resumable(case, self.out)
-        self.scene = scene_for(case)
+        self.log = RunLog(self.out) if self.out is not None else None  # run.log: provenance, progress, warnings
+        with self._warnings_logged():
+            self._build(case, resume)
+
+    def _warnings_logged(self):
+        """While the block runs, warnings also go to run.log (a run without a folder: nothing)."""
+        return self.log.warnings_captured() if self.log is not None else contextlib.nullcontext()
+
+    def _build(self, case: Case, resume: bool) -> None:
+        """The scene, the model (from the checkpoint when resuming), the schedules and the writers."""
+        made_by = describe(provenance(self.threads))
         arrays, meta = load_checkpoint(self.out / CHECKPOINT) if resume else (None, None)
+        if self.log is not None:
+            self.log.line(f"{'resumed at t = %.6g s' % meta['time'] if resume else 'started'}: {case.name}, "
+                          f"{made_by}")
+        self.scene = scene_for(case)
         self.run_state = (RunState(histories=self.scene.new_histories()) if meta is None
                           else RunState.from_checkpoint(meta["writers"], self.scene.new_histories()))
         self.model = Model(case, arrays, Timings(self.run_state.timings))
@@ -63,7 +80,7 @@ class Simulation:
             if resume:
                 self._timeseries.start(resume_time=self.time)
             else:
-                (self.out / "case.toml").write_text(to_toml(case))
+                (self.out / "case.toml").write_text(to_toml(case, header=f"made by {made_by}"))
                 self._timeseries.start()
                 self._on_events(self.step_count)
 
@@ -95,24 +112,16 @@ class Simulation:
         bar = self._progress_bar(end_time)
         wall0, cpu0 = self._segment = _time.perf_counter(), _time.process_time()
         handlers = self._install_signal_handlers()
+        log = self.log
+        if log is not None:
+            log.start_progress(self.time, end_time)
         try:
-            while self.step_count < end_step and not self._stop_requested and not self.run_state.settled:
-                step = self.step_count
-                target = min(end_step, self._next_event(step), step + 500)
-                chunk_start = _time.process_time()
-                self.model.advance(target - step)
-                # CPU time, not wall: a suspended run (SIGSTOP, sleep) or one sharing its cores is no runaway
-                self.watch.cost(target - step, _time.process_time() - chunk_start)
-                if self._stop_file is not None and self._stop_file.exists():
-                    self._stop_requested = True
-                events_start = _time.perf_counter()
-                self._write_guarded(self._on_events, self.step_count)
-                self.model.timings.add("output", _time.perf_counter() - events_start)
-                if bar is not None:
-                    bar.update(self.time - bar.n)
-                    elapsed = _time.perf_counter() - wall0
-                    if elapsed > 0:
-                        bar.set_postfix_str(f"{(self.step_count - start_step) / elapsed:.0f} steps/s", refresh=False)
+            with self._warnings_logged():
+                self._advance_to(end_step, bar, wall0, start_step)
+        except Exception as exc:
+            if log is not None:
+                log.line(f"error at t = {self.time:.6g} s: {type(exc).__name__}: {exc}")
+            raise
         finally:
             self._restore_signal_handlers(handlers)
             if bar is not None:
@@ -125,14 +134,46 @@ class Simulation:
         if self.out is not None:
             self._write_guarded(self._write_checkpoint)
             self._write_guarded(write_final, self.out, self.particles, summary)
+            self._log_end(summary)
         return summary
+
+    def _log_end(self, summary: dict) -> None:
+        from .timing import format_table
+        how = ("stopped (checkpoint written; resume with --resume)" if self._stop_requested else
+               "settled" if self.run_state.settled else "reached its end")
+        self.log.line(f"{how} at t = {self.time:.6g} s after {summary['wall_seconds']:.0f} s wall in all")
+        self.log.line(format_table(summary["timings"], summary["threads"], summary["steps"], summary["simulated_time"]))
+
+    def _advance_to(self, end_step: int, bar, wall0: float, start_step: int) -> None:
+        """The loop: chunks of steps up to the next event, the events, the progress bar and log."""
+        while self.step_count < end_step and not self._stop_requested and not self.run_state.settled:
+            step = self.step_count
+            target = min(end_step, self._next_event(step), step + 500)
+            chunk_start = _time.process_time()
+            self.model.advance(target - step)
+            # CPU time, not wall: a suspended run (SIGSTOP, sleep) or one sharing its cores is no runaway
+            self.watch.cost(target - step, _time.process_time() - chunk_start)
+            if self._stop_file is not None and self._stop_file.exists():
+                self._stop_requested = True
+            events_start = _time.perf_counter()
+            self._write_guarded(self._on_events, self.step_count)
+            self.model.timings.add("output", _time.perf_counter() - events_start)
+            elapsed = _time.perf_counter() - wall0
+            rate = (self.step_count - start_step) / elapsed if elapsed > 0 else None
+            if self.log is not None:
+                self.log.progress(self.time, rate)
+            if bar is not None:
+                bar.update(self.time - bar.n)
+                if rate:
+                    bar.set_postfix_str(f"{rate:.0f} steps/s", refresh=False)
 
     def summary(self, steps: int = 0, wall: float = 0.0) -> dict:
         """The run's summary: time, steps, cost, and what the scene's observables derive."""
         summary = {"case": self.case.name, "simulated_time": self.time, "steps": self.step_count,
                    "settled": self.run_state.settled, "stopped_early": self._stop_requested, "threads": self.threads,
                    "wall_seconds": self.run_state.wall_seconds, "cpu_seconds": self.run_state.cpu_seconds,
-                   "timings": self.model.timings.table(self.run_state.wall_seconds)}
+                   "timings": self.model.timings.table(self.run_state.wall_seconds),
+                   "provenance": provenance(self.threads)}
         summary.update(self.scene.summary(self.model, self.diagnostics(), self.run_state.histories,
                                           {"steps": steps, "wall": wall}))
         return summary

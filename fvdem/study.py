@@ -330,9 +330,10 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
     try:
         outcome = _simulate(run.case, overrides, run.folder, threads)
     except Exception as exc:  # noqa: BLE001  (any failure of one run is reported, the others go on)
+        from .io.run_log import log_tail
         return {"name": run.name, "family": run.family, "status": "failed", "error": f"{type(exc).__name__}: {exc}",
                 "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
-                "wall_seconds": time.perf_counter() - started}
+                "wall_seconds": time.perf_counter() - started, "log_tail": log_tail(run.folder)}
     summary = outcome["summary"]
     return {"name": run.name, "family": run.family, "status": outcome["status"], "t95": summary.get("t95"),
             "folder": run.folder, "simulated_seconds": summary["simulated_time"], "point": run.point,

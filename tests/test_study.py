@@ -55,6 +55,24 @@ def test_a_failing_run_comes_back_with_its_cause():
     assert result["status"] == "failed" and "does not exist" in result["error"]
 
 
+def test_a_run_that_fails_mid_run_comes_back_with_the_last_lines_of_its_log(tmp_path, monkeypatch):
+    """Inside a study worker a run's warnings and its end go to its run.log; a failure reports the log's tail."""
+    import fvdem.simulation as simulation
+    from fvdem.dem.system import SimulationError
+    _, run = _small_run(tmp_path, 0.02)
+    original = simulation.Model.advance
+
+    def advance_then_fail(self, steps):
+        original(self, steps)
+        if self.time >= 0.004:
+            raise SimulationError("non-finite particle velocity (a stand-in failure)")
+    monkeypatch.setattr(simulation.Model, "advance", advance_then_fail)
+    result = run_task(run, 1)
+    assert result["status"] == "failed" and "stand-in failure" in result["error"]
+    tail = "\n".join(result["log_tail"])
+    assert "started: demo" in tail and "error at t = 0.004" in tail and "stand-in failure" in tail
+
+
 @pytest.mark.slow
 def test_the_smoke_study_runs_on_a_local_cluster_and_a_second_call_starts_nothing(tmp_path):
     out = tmp_path / "study"
