@@ -200,6 +200,10 @@ def cmd_laws(args) -> int:
 
 
 def cmd_schema(args) -> int:
+    if args.json_schema:
+        from .json_schema import case_schema, dumps, study_schema
+        print(dumps(case_schema() if args.json_schema == "case" else study_schema()), end="")
+        return 0
     if args.docs:
         from .case import docs_reference
         print(docs_reference(), end="")
@@ -300,6 +304,9 @@ def make_parser() -> argparse.ArgumentParser:
     sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)
     schema = sub.add_parser("schema", help="print the case-file reference (Markdown)")
     schema.add_argument("--docs", action="store_true", help="the form of docs/case-reference.md (registries by name)")
+    schema.add_argument("--json-schema", choices=("case", "study"),
+                        help="a JSON Schema of case files or study files, for an editor's TOML checks "
+                             "(docs/schema/ holds copies)")
     schema.set_defaults(func=cmd_schema)
     laws = sub.add_parser("laws", help="list the registered closures, voidage methods and scenes")
     laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes"),

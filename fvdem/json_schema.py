@@ -1,0 +1,137 @@
+"""JSON Schemas (draft 7) of case files and study files, for editors that check TOML against a
+schema (Taplo / Even Better TOML in VS Code, JetBrains' TOML plugin): completion, hover text, and a
+wrong key or value underlined as it is typed.
+
+The case schema is generated from the same dataclass fields (``fvdem.case``: kind, unit, range,
+choices, registry, doc) that ``load_case`` checks and ``fvdem schema`` documents, so the three cannot
+drift. A schema cannot express the cross-checks (e.g. the DEM step against the collision time, the CFD
+step a multiple of the DEM step); ``fvdem check`` still runs them. ``fvdem schema --json-schema case``
+prints it; ``docs/schema/`` holds the committed copies (``tests/test_json_schema.py`` keeps them current).
+"""
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import MISSING, fields
+
+from .case import UNITS, Case, _choices, case_as_dict
+
+SCHEMA_VERSION = "http://json-schema.org/draft-07/schema#"  # what Taplo (Even Better TOML) reads
+
+
+def _number(meta: dict) -> dict:
+    """A number with the field's bounds; with a unit also a ``"5.3 mm"`` string in one of its units."""
+    number: dict = {"type": "number"}
+    for key, word in (("gt", "exclusiveMinimum"), ("ge", "minimum"), ("lt", "exclusiveMaximum"), ("le", "maximum")):
+        if meta.get(key) is not None:
+            number[word] = meta[key]
+    if not meta.get("unit"):
+        return number
+    units = "|".join(re.escape(u) for u in UNITS[meta["unit"]])
+    text = {"type": "string", "pattern": rf"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s+({units})\s*$",
+            "description": f"a number and a unit: {', '.join(UNITS[meta['unit']])}"}
+    return {"anyOf": [number, text]}
+
+
+def _value(meta: dict, live: bool) -> dict:
+    kind = meta["kind"]
+    if kind == "float":
+        return _number(meta)
+    if kind == "int":
+        out = {"type": "integer"}
+        for key, word in (("gt", "exclusiveMinimum"), ("ge", "minimum"), ("lt", "exclusiveMaximum"),
+                          ("le", "maximum")):
+            if meta.get(key) is not None:
+                out[word] = meta[key]
+        return out
+    if kind == "bool":
+        return {"type": "boolean"}
+    if kind == "str":
+        choices = _choices(meta) if (live or not meta.get("registry")) else None
+        return {"type": "string", **({"enum": list(choices)} if choices else {})}
+    item = _value(dict(meta, kind={"vec3": "float", "bool3": "bool", "int3": "int"}[kind]), live)
+    return {"type": "array", "items": item, "minItems": 3, "maxItems": 3}
+
+
+def _section(cls, defaults, live: bool) -> dict:
+    properties = {}
+    for f in fields(cls):
+        meta = f.metadata
+        if meta.get("kind") == "internal":
+            continue
+        if meta.get("kind") == "section":
+            properties[f.name] = {**_section(f.default_factory, defaults.get(f.name, {}), live),
+                                  **({"description": meta["doc"]} if meta.get("doc") else {})}
+            continue
+        value = _value(meta, live)
+        if meta.get("optional"):
+            value["description"] = "optional; " + (meta.get("doc") or "")
+        elif meta.get("doc"):
+            value["description"] = meta["doc"]
+        if f.name in defaults:
+            value["default"] = defaults[f.name]
+        properties[f.name] = value
+    return {"type": "object", "properties": properties, "additionalProperties": False}
+
+
+def case_schema(live: bool = True) -> dict:
+    """The JSON Schema of a case file. ``live``: registry-backed keys (drag, lift, torque, voidage) list
+    today's registered names as an enum."""
+    schema = _section(Case, case_as_dict(Case()), live)
+    return {"$schema": SCHEMA_VERSION, "title": "fvdem case file",
+            "description": "A case of fvdem (CFD-DEM for fluidized beds): docs/case-reference.md", **schema}
+
+
+def case_keys(cls=Case, prefix: str = "") -> list[str]:
+    """Every dotted case key (``gas.u_over_umf``), the keys a study's settings and ``set`` tables take."""
+    keys = []
+    for f in fields(cls):
+        if f.metadata.get("kind") == "internal":
+            continue
+        if f.metadata.get("kind") == "section":
+            keys += case_keys(f.default_factory, f"{prefix}{f.name}.")
+        else:
+            keys.append(prefix + f.name)
+    return keys
+
+
+def study_schema() -> dict:
+    """The JSON Schema of a study file (``fvdem.study``): its tables, the case keys its settings take."""
+    from .study import CLUSTER_KINDS
+    settings = {"type": "object", "propertyNames": {"enum": case_keys()},
+                "description": "case keys (dotted, e.g. \"gas.inlet_ramp\") and their values"}
+    seconds = {"type": "number", "exclusiveMinimum": 0, "maximum": 1e6}
+    replicas = {"type": "integer", "minimum": 1, "maximum": 1000,
+                "description": "repeats; replica k >= 2 starts from its own bed (insertion seed + k - 1)"}
+    bed = {"type": "object", "required": ["case"], "additionalProperties": False,
+           "properties": {"case": {"type": "string", "description": "a case file, relative to the study file"},
+                          "set": settings}}
+    family = {"type": "object", "required": ["case"], "additionalProperties": False,
+              "properties": {**bed["properties"],
+                             "bed": {"type": "string", "description": "the bed (a [beds] name) its runs start from"},
+                             "duration": {**seconds, "description": "this family's own simulated seconds"},
+                             "replicas": replicas}}
+    return {"$schema": SCHEMA_VERSION, "title": "fvdem study file",
+            "description": "A sweep of fvdem runs (fvdem study): docs/studies.md",
+            "type": "object", "required": ["duration", "families"], "additionalProperties": False,
+            "properties": {
+                "name": {"type": "string"}, "description": {"type": "string"},
+                "duration": {**seconds, "description": "simulated seconds of every run (time.end)"},
+                "replicas": replicas, "settings": settings,
+                "beds": {"type": "object", "additionalProperties": bed,
+                         "description": "settled beds, each prepared once before the runs that start from it"},
+                "families": {"type": "object", "minProperties": 1, "additionalProperties": family,
+                             "description": "families of runs: a base case and its own settings"},
+                "axes": {"type": "object", "propertyNames": {"enum": case_keys()},
+                         "additionalProperties": {"type": "array", "minItems": 1},
+                         "description": "case keys and the values to sweep (every combination)"},
+                "exclude": {"type": "array", "items": {"type": "object"},
+                            "description": "runs to leave out: family and axis values they match"},
+                "cluster": {"type": "object", "properties": {"kind": {"enum": list(CLUSTER_KINDS)},
+                                                              "workers": {"type": "integer", "minimum": 1}},
+                            "description": "where the runs go: local, or dask-jobqueue's slurm, pbs, sge, lsf "
+                                           "with that class's options (memory required)"}}}
+
+
+def dumps(schema: dict) -> str:
+    return json.dumps(schema, indent=1, ensure_ascii=False) + "\n"
