@@ -102,8 +102,19 @@ def cmd_compare(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     print(plot_mixing(runs, out / "mixing_compare.png"))
-    print(plot_t95(runs, out / "t95.png"))
+    print(plot_t95(runs, out / "t95.png", names=compare_groups(runs)))
     return 0
+
+
+def compare_groups(runs) -> list[str]:
+    """The line of each run on the t95 chart: its case name (runs of one case at several U/Umf make one
+    line), unless two runs of that name share a U/Umf (two `demo` runs): then each such run is its own,
+    named by its folder."""
+    from .analysis.plots import run_labels
+    cases = [load_case(Path(r) / "case.toml") for r in runs]
+    points = [(c.name, c.gas.u_over_umf, c.gas.inlet_velocity) for c in cases]
+    labels = run_labels(runs)
+    return [labels[k] if points.count(points[k]) > 1 else cases[k].name for k in range(len(runs))]
 
 
 def cmd_study(args) -> int:

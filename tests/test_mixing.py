@@ -84,3 +84,38 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path):
     assert by_family["ar1_paper"] == [(2.9, None, 4.0)] and len(by_family["ar1"]) == 2
     assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp")]) == 0
     assert (tmp_path / "cmp" / "t95.png").exists() and (tmp_path / "cmp" / "mixing_compare.png").exists()
+    # two runs of one case at one velocity (two `demo` runs) are two lines named by their folders
+    from fvdem.cli import compare_groups
+    assert compare_groups(runs + [twin]) == ["ar1", "ar1_2.9", "ar4_mp", "twin"]
+
+
+def test_cells_in_bed_leave_out_the_freeboard_above_a_low_bed_and_keep_its_bubbles():
+    from fvdem.analysis.mixing import cells_in_bed
+    z = np.repeat((np.arange(40) + 0.5) * 0.015, 16)  # 4 x 4 cells a layer, 40 layers of 15 mm
+    centres = np.column_stack([np.zeros_like(z), np.zeros_like(z), z])
+    voidage = np.where(z < 0.18, 0.45, 1.0)            # bed to 0.18 m, empty above
+    voidage[np.flatnonzero(z < 0.1)[:5]] = 0.98         # a bubble low in the bed
+    mask = cells_in_bed(voidage, centres, below=0.3)
+    assert mask.sum() == 12 * 16 and np.all(z[mask] < 0.18) and mask[np.flatnonzero(z < 0.1)[:5]].all()
+    tall = np.full_like(z, 0.6)                         # a bed above 0.3 m: every cell below 0.3 m
+    assert cells_in_bed(tall, centres, below=0.3).sum() == np.sum(z < 0.3)
+    assert not cells_in_bed(np.ones_like(z), centres).any()
+
+
+def test_a_log_panel_leaves_out_the_zero_at_the_start():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fvdem.analysis.plots import log_panel
+    fig, ax = plt.subplots()
+    log_panel(ax, np.linspace(0, 1, 5), np.array([0.0, 1e-3, 2e-3, 5e-4, 1e-3]))
+    low, high = ax.get_ylim()
+    plt.close(fig)
+    assert 1e-4 < low < 5e-4 and high >= 2e-3
+
+
+def test_run_labels_tell_folders_of_the_same_name_apart(tmp_path):
+    from fvdem.analysis.plots import run_labels
+    assert run_labels([tmp_path / "a" / "demo", tmp_path / "b" / "demo"]) == ["a/demo", "b/demo"]
+    assert run_labels([tmp_path / "x", tmp_path / "y"]) == ["x", "y"]

@@ -18,10 +18,10 @@ and ``rounds`` keeps each round's wall times and ratios. A single round of the d
 (40 CFD steps at the defaults) once read an overhead of 2.08 and a 2-thread speedup of 1.04 where the
 next two read 1.41-1.45 and 1.45-1.46 (docs/benchmarks.md): one round is not a measurement.
 
-Each run starts from the case's initial state (the paper cases read the settled beds: run
-``fvdem run cases/bed_ar1.toml --out runs/bed_ar1`` and ``cases/bed_ar4.toml`` first), takes a short
-warm-up (kernels loaded, first neighbour list built) and measures ``--duration`` simulated seconds of
-the bed's start. Prints one JSON object as the last line.
+Each run starts from the settled bed of its shape (``runs/bed_ar1``, ``runs/bed_ar4``: settled first when
+missing, ``tools/_beds.py``), takes a short warm-up (kernels loaded, first neighbour list built) and
+measures ``--duration`` simulated seconds of the bed's start. ``--quick``: 1,500-particle beds, 2 CFD
+steps, one round (seconds; what the test suite runs). Prints one JSON object as the last line.
 """
 from __future__ import annotations
 
@@ -35,13 +35,14 @@ import numba
 import numpy as np
 
 import fvdem
+from _beds import ROOT, bed_overrides, settled_beds
 
 SETTINGS = {
     "paper": {"contact.normal_stiffness": 2.0e4, "time.dem_step": 1e-5, "gas.cfd_step": 1e-4},
     "default": {"contact.normal_stiffness": 800.0, "time.dem_step": 5e-5, "gas.cfd_step": 5e-4},
 }
 VARIANTS = {
-    "ar1-default": ("cases/ar1.toml", SETTINGS["default"]),
+    "ar1-default": ("cases/ar1.toml", SETTINGS["default"]),  # relative to the repository (ROOT)
     "ar4_mp-default": ("cases/ar4_mp.toml", SETTINGS["default"]),
     "ar1-paper": ("cases/ar1.toml", SETTINGS["paper"]),
     "ar1-fixed-bed": ("cases/ar1.toml", dict(SETTINGS["paper"], **{"particles.fixed": True})),
@@ -50,7 +51,7 @@ VARIANTS = {
 
 def measure(case_path, overrides, duration, threads):
     """Wall and CPU seconds per simulated second over ``duration`` after a warm-up, and the phases."""
-    case = fvdem.load_case(case_path, dict(overrides, **{"output.progress": False}))
+    case = fvdem.load_case(ROOT / case_path, dict(overrides, **{"output.progress": False}))
     sim = fvdem.Simulation(case, threads=threads, progress=False)
     sim.run(2 * sim.time_step if case.gas.enabled else 20 * case.time.dem_step)  # warm-up
     before = dict(sim.model.timings.seconds)
@@ -65,10 +66,16 @@ def measure(case_path, overrides, duration, threads):
             "timings": phases}
 
 
-def variant(name, duration, threads, repeat=3):
+def bed_of(name: str) -> str:
+    """The settled bed a variant starts from (its case's shape)."""
+    return "ar4" if "ar4" in VARIANTS[name][0] else "ar1"
+
+
+def variant(name, duration, threads, repeat=3, quick=False):
     """The variant's figures: medians over ``repeat`` alternated rounds of the coupled run, the DEM alone
     and the coupled run on 1 thread, with each round's figures in ``rounds``."""
     case_path, overrides = VARIANTS[name]
+    overrides = dict(overrides, **bed_overrides(bed_of(name), quick))
     rounds = []
     for _ in range(repeat):
         coupled = measure(case_path, overrides, duration, threads)
@@ -119,17 +126,23 @@ def _spread(result, key):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--variants", nargs="+", default=["ar1-default", "ar4_mp-default", "ar1-paper"],
-                        choices=list(VARIANTS))
+                        choices=list(VARIANTS), help="case and settings variants to measure")
     parser.add_argument("--duration", type=float, default=0.02, help="simulated seconds per measurement")
     parser.add_argument("--threads", type=int, default=0, help="numba threads (0: all)")
     parser.add_argument("--repeat", type=int, default=3, help="alternated rounds per variant (medians reported)")
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--quick", action="store_true",
+                        help="1,500-particle beds, 2 CFD steps, one round: that the tool works, in seconds")
+    parser.add_argument("--json", action="store_true", help="the result as one JSON line")
     args = parser.parse_args(argv)
     if args.repeat < 1 or args.duration <= 0.0:
         parser.error(f"--repeat must be at least 1 (got {args.repeat}) and --duration positive (got {args.duration})")
+    if args.quick:
+        args.duration, args.repeat = 1e-3, 1
+        args.variants = [v for v in args.variants if v != "ar1-paper"] or args.variants
+    settled_beds([bed_of(v) for v in args.variants], "bench_coupled", args.quick)  # before any measuring
     results = {}
     for name in args.variants:
-        r = results[name] = variant(name, args.duration, args.threads, args.repeat)
+        r = results[name] = variant(name, args.duration, args.threads, args.repeat, args.quick)
         print(f"{name:15s} {r['wall_seconds_per_simulated_second']:8.1f} s wall per simulated s; DEM alone "
               f"{r['dem_only_wall_seconds_per_simulated_second']:.1f}; coupling overhead {r['coupling_overhead']:.2f} "
               f"({_spread(r, 'coupling_overhead')}); "

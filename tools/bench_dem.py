@@ -6,7 +6,8 @@ Usage:
 
 The settled beds come from ``fvdem run cases/bed_ar1.toml`` and ``cases/bed_ar4.toml``
 (``runs/bed_ar1/final_state.npz``, ``runs/bed_ar4/final_state.npz``; ``--state-dir`` to change);
-the tool runs those cases first if the states are missing (minutes to tens of minutes).
+the tool settles them first if the states are missing (minutes to tens of minutes, ``tools/_beds.py``).
+``--quick``: 1,500-particle beds and 5 steps, that the tool works (seconds).
 Each shape is measured in its own subprocess (so peak memory is per bed), at 1 and 2 threads in
 the same process, wall and CPU time side by side. The last line of output is one JSON object:
 
@@ -27,23 +28,18 @@ import sys
 import time
 from pathlib import Path
 
+from _beds import CASES, settled_beds
+
 ROOT = Path(__file__).resolve().parents[1]
-BEDS = {"sphere": ("bed_ar1", ROOT / "cases" / "bed_ar1.toml"),
-        "spherocylinder": ("bed_ar4", ROOT / "cases" / "bed_ar4.toml")}
+BEDS = {"sphere": ("ar1", CASES["ar1"]), "spherocylinder": ("ar4", CASES["ar4"])}
 
 
 def worker(shape: str, state: Path, steps: int) -> dict:
     import numba
-    import numpy as np
 
-    import fvdem
-    from fvdem.dem.particles import ParticleArrays
-    from fvdem.model import build_dem
-
-    case = fvdem.load_case(BEDS[shape][1])
-    with np.load(state) as data:
-        particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
-    dem = build_dem(case, particles)
+    from _beds import settled_dem
+    case, dem = settled_dem(BEDS[shape][0], state)
+    particles = dem.particles
     numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
     dem.step(50)  # compile and warm up
     result = {}
@@ -73,31 +69,27 @@ def worker(shape: str, state: Path, steps: int) -> dict:
     return result
 
 
-def ensure_state(shape: str, state_dir: Path) -> Path:
-    name, case = BEDS[shape]
-    state = state_dir / name / "final_state.npz"
-    if not state.exists():
-        print(f"settling {name} first (fvdem run {case.relative_to(ROOT)}); this takes a while", file=sys.stderr)
-        subprocess.run([sys.executable, "-m", "fvdem.cli", "run", str(case), "--out", str(state.parent),
-                        "--overwrite"], check=True)
-    return state
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--json", action="store_true", help="print only the JSON line on stdout")
-    parser.add_argument("--steps", type=int, default=300)
-    parser.add_argument("--shapes", nargs="+", default=list(BEDS), choices=list(BEDS))
-    parser.add_argument("--state-dir", type=Path, default=ROOT / "runs")
+    parser.add_argument("--steps", type=int, default=300, help="measured DEM steps per thread count")
+    parser.add_argument("--shapes", nargs="+", default=list(BEDS), choices=list(BEDS), help="the beds to measure")
+    parser.add_argument("--state-dir", type=Path, help="where the settled beds are (default runs/)")
+    parser.add_argument("--quick", action="store_true", help="1,500-particle beds and 5 steps (seconds)")
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     parser.add_argument("--state", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
         print(json.dumps(worker(args.worker, args.state, args.steps)))
         return 0
+    if args.state_dir:
+        os.environ["FVDEM_BEDS_DIR"] = str(args.state_dir)
+    if args.quick:
+        args.steps = 5
+    states = settled_beds([BEDS[shape][0] for shape in args.shapes], "bench_dem", args.quick)
     results = {}
     for shape in args.shapes:
-        state = ensure_state(shape, args.state_dir)
+        state = states[BEDS[shape][0]]
         proc = subprocess.run([sys.executable, __file__, "--worker", shape, "--state", str(state),
                                "--steps", str(args.steps)], capture_output=True, text=True, check=True)
         results[shape] = json.loads(proc.stdout.strip().splitlines()[-1])

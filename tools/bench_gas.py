@@ -64,10 +64,13 @@ def run(solver, mesh, steps, start=0):
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--json", action="store_true")
-    parser.add_argument("--steps", type=int, default=100)
-    parser.add_argument("--reference-steps", type=int, default=3)
+    parser.add_argument("--json", action="store_true", help="the result as one JSON line")
+    parser.add_argument("--steps", type=int, default=100, help="timed CFD steps")
+    parser.add_argument("--reference-steps", type=int, default=3, help="steps of FiPy's own reference solve")
+    parser.add_argument("--quick", action="store_true", help="3 steps and 1 reference step (seconds)")
     args = parser.parse_args()
+    if args.quick:
+        args.steps, args.reference_steps = 3, 1
     mesh = GasMesh.box((10, 10, 70), (0.0, 0.0, 0.0), (0.15, 0.15, 1.05))
     settings = dict(inlet_velocity=2 * 1.58, scheme="piso", correctors=2)
 

@@ -37,6 +37,7 @@ from scipy.optimize import brentq
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
 
+from _beds import settled_beds, state_path  # noqa: E402
 from fvdem.analysis.bed import uniform_bed_umf  # noqa: E402
 from fvdem.analysis.suspension import richardson_zaki_exponent  # noqa: E402
 from fvdem.case import CaseError, case_from_dict, load_case  # noqa: E402
@@ -64,7 +65,7 @@ def measure_beds(path=BEDS, sample=400) -> dict:
     beds = {}
     for key, name in (("ar1", "bed_ar1"), ("ar4", "bed_ar4")):
         case = load_case(ROOT / "cases" / f"{name}.toml")
-        with np.load(ROOT / "runs" / name / "final_state.npz") as data:
+        with np.load(state_path(key)) as data:
             particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
         d = case.domain
         packing = bed_packing(particles, d.lower, d.upper, d.periodic)
@@ -239,8 +240,12 @@ def main(argv=None) -> int:
     parser.add_argument("--json", action="store_true", help="one JSON object as the last line")
     parser.add_argument("--beds", type=Path, default=BEDS, help="the settled beds' packing (JSON)")
     parser.add_argument("--measure-beds", action="store_true",
-                        help="record the settled beds' packing in --beds (needs runs/bed_ar1 and runs/bed_ar4)")
+                        help="record the settled beds' packing in --beds (runs/bed_ar1 and runs/bed_ar4, settled "
+                             "first when missing)")
+    parser.add_argument("--quick", action="store_true", help="the same atlas (it takes seconds already)")
     args = parser.parse_args(argv)
+    if args.measure_beds:
+        settled_beds(["ar1", "ar4"], "closure_atlas")
     wall0, cpu0 = time.perf_counter(), time.process_time()
     beds = measure_beds(args.beds) if args.measure_beds else json.loads(args.beds.read_text())
     with warnings.catch_warnings():  # the root finders try far outside the ranges: judged at the answers

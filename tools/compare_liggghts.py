@@ -33,17 +33,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
-
-
-def settled_sphere_bed(state: Path):
-    """``(case, DEMSystem)`` of ``cases/bed_ar1.toml`` holding the settled bed saved in ``state``."""
-    import fvdem
-    from fvdem.dem.particles import ParticleArrays
-    from fvdem.model import build_dem
-    case = fvdem.load_case(ROOT / "cases" / "bed_ar1.toml")
-    with np.load(state) as data:
-        particles = ParticleArrays.from_dict({k: data[k] for k in data.files})
-    return case, build_dem(case, particles)
+from _beds import settled_beds, settled_dem  # noqa: E402
 
 
 def write_data(path: Path, particles, lower, upper) -> None:
@@ -147,18 +137,27 @@ def liggghts_version(executable: str, folder: Path) -> str | None:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--state", type=Path, default=ROOT / "runs" / "bed_ar1" / "final_state.npz")
+    parser.add_argument("--state", type=Path, help="a settled sphere bed (default: runs/bed_ar1's, settled first "
+                                                   "when missing)")
     parser.add_argument("--steps", type=int, default=1000, help="measured steps (after a warm-up)")
     parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2], help="LIGGGHTS MPI ranks (and fvdem threads)")
     parser.add_argument("--liggghts", default="liggghts", help="the LIGGGHTS executable")
     parser.add_argument("--keep", type=Path, help="write the LIGGGHTS data, input and logs here")
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--quick", action="store_true", help="a 1,500-sphere bed, 20 steps, 1 rank (seconds)")
+    parser.add_argument("--json", action="store_true", help="the result as one JSON line")
     args = parser.parse_args(argv)
-    if not args.state.exists():
-        print(f"compare_liggghts: {args.state} is missing: run fvdem run cases/bed_ar1.toml --out runs/bed_ar1 first",
+    if shutil.which(args.liggghts) is None:  # before anything is settled or measured
+        print(f"compare_liggghts: LIGGGHTS ({args.liggghts!r}) not found: apt-get install liggghts, or --liggghts PATH",
               file=sys.stderr)
         return 2
-    case, dem = settled_sphere_bed(args.state)
+    if args.quick:
+        args.steps, args.ranks = 20, [1]
+    if args.state is None:
+        args.state = settled_beds(["ar1"], "compare_liggghts", args.quick)["ar1"]
+    elif not args.state.exists():
+        print(f"compare_liggghts: --state {args.state}: no such file", file=sys.stderr)
+        return 2
+    case, dem = settled_dem("ar1", args.state)
     particles = dem.particles
     result = {"bed": str(args.state), "particles": particles.count, "steps": args.steps,
               "dem_step": case.time.dem_step, "normal_stiffness": case.contact.normal_stiffness}

@@ -20,7 +20,8 @@ compares, without any particle motion:
     python tools/fixed_bed_layers.py --json [--voidage divided trilinear] [--drag NAME] [--case cases/ar1.toml]
         [--state umf_sphere_defluidized.npz]
 
-Prints a table per method, writes ``fixed_bed_layers.png`` and, as the last line, one JSON object
+The paper bed is settled first when missing (``tools/_beds.py``); ``--quick``: a 1,500-sphere bed, one
+method, 5 ms per velocity (seconds; that the tool works, not a result). Prints a table per method, writes ``fixed_bed_layers.png`` and, as the last line, one JSON object
 ``{"methods": {"<voidage>": {"umf_fixed_bed": ..., "umf_closure_uniform_bed": ..., "layers": [...]}}}``.
 """
 from __future__ import annotations
@@ -37,6 +38,8 @@ import fvdem
 from fvdem.analysis.bed import bed_packing, uniform_bed_pressure_gradient, uniform_bed_umf
 from fvdem.coupling.voidage import voidage_names
 from fvdem.scenes.observables import weight_per_area
+
+from _beds import ROOT, bed_of_case, bed_overrides, settled_beds
 
 RATIOS = (0.9, 1.0, 1.1, 1.2)  # velocities solved, over the closure's uniform-bed Umf
 
@@ -83,17 +86,24 @@ def layers(sim, top, model, axes, superficial):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--case", default="cases/ar1.toml", help="a bed case whose initial state is a settled bed")
+    parser.add_argument("--case", default=str(ROOT / "cases" / "ar1.toml"),
+                        help="a bed case whose initial state is a settled bed (default: cases/ar1.toml)")
     parser.add_argument("--voidage", nargs="+", choices=voidage_names(), default=["divided", "trilinear"])
     parser.add_argument("--drag", help="drag law (fvdem laws drag; default: the case's)")
     parser.add_argument("--state", help="particle state to freeze instead of the case's initial state (e.g. the "
                         "defluidized bed validate_umf.py writes, umf_<tag>_defluidized.npz)")
     parser.add_argument("--duration", type=float, default=0.3, help="simulated seconds per velocity (to steady)")
     parser.add_argument("--cfd-step", type=float, default=5e-4)
-    parser.add_argument("--out", default=".")
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--out", default=".", help="folder for fixed_bed_layers.png")
+    parser.add_argument("--quick", action="store_true", help="a 1,500-sphere bed, one method, 5 ms a velocity")
+    parser.add_argument("--json", action="store_true", help="the result as one JSON line")
     args = parser.parse_args(argv)
     wall0 = time.perf_counter()
+    bed = None if args.state else bed_of_case(args.case)
+    if args.quick:
+        args.duration, args.voidage = 0.005, args.voidage[:1]
+    if bed is not None:  # settled before anything is measured
+        settled_beds([bed], "fixed_bed_layers", args.quick)
     # fvdem's defaults for the steps (the particles do not move: only the gas step matters)
     base = {"gas.cfd_step": args.cfd_step, "time.dem_step": args.cfd_step / 10, "contact.normal_stiffness": 800.0,
             "gas.inlet_ramp": 0.0}
@@ -101,6 +111,8 @@ def main(argv=None):
         base["coupling.drag"] = args.drag
     if args.state:
         base["particles.initial_state"] = str(Path(args.state).resolve())
+    elif bed is not None:
+        base.update(bed_overrides(bed, args.quick))
     probe, _ = steady(args.case, base, 2 * args.cfd_step)
     packing = bed_packing(probe.particles, probe.case.domain.lower, probe.case.domain.upper, probe.case.domain.periodic)
     model, density = probe.bridge.model, probe.case.particles.density

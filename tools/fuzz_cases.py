@@ -126,10 +126,13 @@ def check_one(table: dict, source: str):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--count", type=int, default=10000)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--count", type=int, default=10000, help="mutated case files to try")
+    parser.add_argument("--seed", type=int, default=0, help="random seed of the mutations")
+    parser.add_argument("--quick", action="store_true", help="200 mutations (seconds)")
+    parser.add_argument("--json", action="store_true", help="the result as one JSON line")
     args = parser.parse_args(argv)
+    if args.quick:
+        args.count = 200
     rng = random.Random(args.seed)
     cases = case_tables()
     counts = {"valid": 0, "refused": 0, "crash": 0, "unnamed": 0}

@@ -40,6 +40,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tools"))
+from _beds import settled_beds, settled_dem  # noqa: E402
 
 # Row i's pairs, as fvdem/dem/forces.py (_sphere_row) and fvdem/dem/contact_law.py (contact_force) compute
 # them for identical spheres (the pair constants precomputed) in a box without periodic axes.
@@ -198,8 +199,11 @@ def compile_kernels(folder: Path) -> dict:
     kernels = {}
     for name, (source, flags) in FLAGS.items():
         (folder / f"{name}.c").write_text(source)
-        subprocess.run([cc, *flags, "-shared", "-fPIC", "-o", str(folder / f"{name}.so"), str(folder / f"{name}.c")],
+        # compiled with the flags, linked without them: linking with -ffast-math adds crtfastmath.o, which
+        # sets flush-to-zero for the whole process that loads the library (later tests then saw no subnormals)
+        subprocess.run([cc, *flags, "-fPIC", "-c", "-o", str(folder / f"{name}.o"), str(folder / f"{name}.c")],
                        check=True)
+        subprocess.run([cc, "-shared", "-o", str(folder / f"{name}.so"), str(folder / f"{name}.o")], check=True)
         kernels[name] = ctypes.CDLL(str(folder / f"{name}.so")).pair_loop
     return kernels
 
@@ -282,19 +286,22 @@ def measure(dem, calls: int, rounds: int) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--json", action="store_true", help="print only the JSON line")
-    parser.add_argument("--calls", type=int, default=20)
-    parser.add_argument("--rounds", type=int, default=10)
-    parser.add_argument("--state", type=Path, default=ROOT / "runs" / "bed_ar1" / "final_state.npz")
+    parser.add_argument("--calls", type=int, default=20, help="kernel calls per round")
+    parser.add_argument("--rounds", type=int, default=10, help="alternated rounds (min and median reported)")
+    parser.add_argument("--state", type=Path, help="a settled sphere bed (default: runs/bed_ar1's, settled first "
+                                                   "when missing)")
+    parser.add_argument("--quick", action="store_true", help="a 1,500-sphere bed, 2 calls, 1 round (seconds)")
     args = parser.parse_args()
-    if not args.state.exists():
-        print(f"no settled bed at {args.state}: run `fvdem run cases/bed_ar1.toml --out runs/bed_ar1` first",
-              file=sys.stderr)
+    if args.quick:
+        args.calls, args.rounds = 2, 1
+    if args.state is None:
+        args.state = settled_beds(["ar1"], "pair_loop_reference", args.quick)["ar1"]
+    elif not args.state.exists():
+        print(f"pair_loop_reference: --state {args.state}: no such file", file=sys.stderr)
         return 2
     import numba
 
-    from compare_liggghts import settled_sphere_bed
-
-    dem = settled_sphere_bed(args.state)[1]
+    dem = settled_dem("ar1", args.state)[1]
     dem.step(20)  # lists built, histories of a running bed
     result = measure(dem, args.calls, args.rounds)
     n = dem.particles.count

@@ -96,8 +96,14 @@ def void_fraction_binarity(values, packed_percentile: float = 2.0) -> float:
     return float(min(1.0, max(0.0, values.var() / room)))
 
 
-def void_fraction_histogram(voidage, cell_centres, below: float = 0.3, bins=20):
-    """Histogram (density) of the cell voidage of cells with centres below ``below`` [m] (Fig. 7)."""
-    values = np.asarray(voidage)[np.asarray(cell_centres)[:, 2] < below]
-    counts, edges = np.histogram(values, bins=bins, range=(0.0, 1.0), density=True)
-    return counts, edges
+def cells_in_bed(voidage, cell_centres, below: float = 0.3, empty: float = 0.99) -> np.ndarray:
+    """Mask of the cells whose centres lie below ``below`` [m] and at or below the bed's top layer: the
+    highest horizontal layer of cells whose mean voidage is under ``empty``. A bed lower than ``below``
+    (a small demo column) then contributes its own cells, not the particle-free freeboard above it,
+    whose voidage of 1 would dominate a histogram; bubbles inside the bed stay counted."""
+    voidage, centres = np.asarray(voidage, float), np.asarray(cell_centres, float)
+    heights, layer = np.unique(np.round(centres[:, 2], 9), return_inverse=True)
+    layer_mean = np.bincount(layer, weights=voidage) / np.bincount(layer)
+    filled = np.nonzero(layer_mean < empty)[0]
+    top = heights[filled[-1]] if filled.size else -np.inf
+    return (centres[:, 2] < below) & (np.round(centres[:, 2], 9) <= top)

@@ -41,6 +41,29 @@ LABELS = {"kinetic_energy": "kinetic energy [J]", "bed_top": "bed top [m]",
           "pressure_drop_over_weight": "bed pressure drop / (W/A)"}
 
 
+def log_panel(ax, time, values) -> None:
+    """A log-scale panel: zeros (the state at t = 0) are left out, not drawn at a floor that stretches the
+    axis to 1e-30, and the axis spans at most six decades below the largest value."""
+    values = np.where(np.asarray(values) > 0, values, np.nan)
+    ax.semilogy(time, values)
+    positive = values[np.isfinite(values)]
+    if positive.size:
+        ax.set_ylim(bottom=0.5 * max(positive.min(), 1e-6 * positive.max()))
+
+
+def run_labels(runs) -> list[str]:
+    """Labels that tell run folders apart: each folder's name, with as many parent folders as it takes
+    where two names are the same (``a/demo`` and ``b/demo``)."""
+    paths = [Path(r).resolve() for r in runs]
+    depth = 1
+    while depth < 32:
+        labels = ["/".join(p.parts[-depth:]) for p in paths]
+        if len(set(labels)) == len(labels) or all(depth >= len(p.parts) for p in paths):
+            return labels
+        depth += 1
+    return [str(p) for p in paths]
+
+
 def plot_timeseries(out) -> Path:
     """Every recorded diagnostic against time (whatever the run's phases wrote)."""
     plt = _pyplot()
@@ -50,7 +73,7 @@ def plot_timeseries(out) -> Path:
     fig, axes = plt.subplots(rows, 2, figsize=(9, 2.6 * rows), sharex=True, squeeze=False)
     for ax, key in zip(axes.flat, keys):
         if key in LOG_SCALE:
-            ax.semilogy(ts["time"], np.maximum(ts[key], 1e-30))
+            log_panel(ax, ts["time"], ts[key])
         else:
             ax.plot(ts["time"], ts[key])
         ax.set_ylabel(LABELS.get(key, key))
@@ -117,12 +140,12 @@ def plot_mixing(runs, path, level=0.95) -> Path:
     from .mixing import mixing_time
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.5, 4))
-    for out in runs:
+    for out, name in zip(runs, run_labels(runs)):
         ts = read_timeseries(out)
         if "mixing_entropy" not in ts:
             continue
         t95 = mixing_time(ts["time"], ts["mixing_entropy"], level)
-        label = Path(out).name + (f" (t95 = {t95:.2f} s)" if t95 is not None else " (t95 not reached)")
+        label = name + (f" (t95 = {t95:.2f} s)" if t95 is not None else " (t95 not reached)")
         line, = ax.plot(ts["time"], ts["mixing_entropy"], label=label)
         if t95 is not None:
             ax.axvline(t95, color=line.get_color(), ls=":", lw=1)
@@ -176,22 +199,24 @@ def plot_t95(runs, path, level=0.95, names=None) -> Path:
 
 
 def plot_void_fraction_histogram(out, below=0.3) -> Path:
-    """Histogram of the cell voidage below ``below`` [m] over all gas snapshots (seed 000 Fig. 7)."""
+    """Histogram of the cell voidage below ``below`` [m] and inside the bed (``cells_in_bed``: the empty
+    freeboard of a bed lower than ``below`` left out) over all gas snapshots (seed 000 Fig. 7)."""
     import meshio
-    from .mixing import void_fraction_histogram
+    from .mixing import cells_in_bed
     plt = _pyplot()
-    values, centres = [], None
+    values = []
     for path in sorted(Path(out).glob("gas_*.vtu"))[1:]:  # the first snapshot is the initial state
         grid = meshio.read(path)
         centres = grid.points[grid.cells[0].data].mean(axis=1)
-        values.append(grid.cell_data["voidage"][0])
+        voidage = np.asarray(grid.cell_data["voidage"][0])
+        values.append(voidage[cells_in_bed(voidage, centres, below)])
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
-    if values:
-        counts, edges = void_fraction_histogram(np.concatenate(values), np.tile(centres, (len(values), 1)), below)
+    if values and sum(v.size for v in values):
+        counts, edges = np.histogram(np.concatenate(values), bins=20, range=(0.0, 1.0), density=True)
         ax.bar(0.5 * (edges[1:] + edges[:-1]), counts, width=np.diff(edges), edgecolor="k", lw=0.4)
     ax.set_xlabel("cell void fraction")
     ax.set_ylabel("probability density")
-    ax.set_title(f"cells below z = {below} m, {len(values)} snapshots")
+    ax.set_title(f"cells below z = {below} m inside the bed, {len(values)} snapshots")
     ax.grid(alpha=0.3)
     return _save(fig, Path(out) / "void_fraction.png")
 
