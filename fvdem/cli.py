@@ -127,6 +127,13 @@ def cmd_study(args) -> int:
         print(f"wrote {log_path}: the study's running runs checkpoint at their next chunk and stop; "
               "run the same fvdem study command to continue")
         return 0
+    if args.archive:
+        if not target.is_dir() or not (target / "study.json").exists():
+            return _fail(f"--archive: {target} is not a study folder (no study.json)")
+        from .study import archive
+        for path in archive(target, args.archive):
+            print(path)
+        return 0
     if args.report and target.is_dir():
         if not (target / "study.json").exists():
             return _fail(f"{target} is not a study folder (no study.json)")
@@ -306,7 +313,12 @@ def make_parser() -> argparse.ArgumentParser:
     study.add_argument("--threads-per-worker", type=positive_count, default=1,
                        help="numba threads of each run (default 1)")
     study.add_argument("--scheduler", help="address of a running Dask scheduler (instead of a LocalCluster)")
-    study.add_argument("--report", action="store_true", help="only write the report of a study folder")
+    study.add_argument("--report", action="store_true",
+                       help="only write the report of a study folder (or of an archive of one, --archive)")
+    study.add_argument("--archive", metavar="DEST",
+                       help="copy the compact results of a study folder's runs to DEST (time series, summaries, "
+                            "void-fraction histograms, logs; no states or VTU), small enough to commit; "
+                            "fvdem study DEST --report rebuilds the report from them")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
     study.add_argument("--stop", action="store_true",
                        help="ask the study running in this folder to stop (its runs checkpoint first)")

@@ -44,6 +44,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import re
 import signal
 import sys
 import threading
@@ -636,7 +637,8 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     latest = {r["name"]: r for r in record.get("runs", [])}
     latest.update({r["name"]: r for r in results})
     names = [r.name for r in study.runs]
-    runs = [latest.get(r.name) or _pending(r) for r in study.runs] + [r for n, r in latest.items() if n not in names]
+    runs = ([{**(latest.get(r.name) or _pending(r)), "replica": r.replica} for r in study.runs]
+            + [r for n, r in latest.items() if n not in names])
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name,
              **({"scheduler": description} if description else {}), "runs": runs}
     path.write_text(json.dumps(index, indent=1) + "\n")
@@ -683,6 +685,18 @@ def _bed_surface(series):
     return float(np.mean(series["bed_top"][times >= 0.5 * times[-1]]))
 
 
+def _inlet_passes_umf(folder: Path) -> float | None:
+    """When [s] a run's inlet velocity reaches the Umf its ``u_over_umf`` refers to: ``inlet_ramp / u_over_umf``
+    for a linear ramp from 0 (0 for a full-speed start); None without a readable case or a U/Umf."""
+    try:
+        gas = load_case(folder / "case.toml").gas
+    except CaseError:
+        return None
+    if not gas.u_over_umf:
+        return None
+    return gas.inlet_ramp / gas.u_over_umf if gas.u_over_umf >= 1.0 else None
+
+
 def _pairs(runs, first, second) -> dict:
     """``{axes values: (run of family first, run of family second)}`` where both ran at those values."""
     by = {}
@@ -705,20 +719,39 @@ def void_fraction_samples(folder, below=0.3):
     return np.concatenate(values) if values else np.zeros(0)
 
 
+VOID_FRACTION = "void_fraction.json"  # an archived run's void-fraction record (its gas snapshots are not kept)
+
+
+def void_fraction_record(folder, below=0.3) -> dict | None:
+    """A run's cell void fractions below ``below`` [m] over the second half of its gas snapshots, as a
+    20-bin density histogram on [0, 1], their binarity (``void_fraction_binarity``) and count; from the
+    snapshots, else from an archived run's ``void_fraction.json``; None without either."""
+    import numpy as np
+    from .analysis.mixing import void_fraction_binarity
+    values = void_fraction_samples(folder, below)
+    if values.size:
+        counts, edges = np.histogram(values, bins=20, range=(0.0, 1.0), density=True)
+        binarity = void_fraction_binarity(values)
+        return {"below": below, "edges": edges.tolist(), "density": counts.tolist(), "cells": int(values.size),
+                "binarity": None if math.isnan(binarity) else binarity}
+    stored = Path(folder) / VOID_FRACTION
+    return json.loads(stored.read_text()) if stored.exists() else None
+
+
 def plot_void_fractions(runs, path, below=0.3):
     """Histograms of the cell void fraction below ``below`` [m] over the second half of each run's gas
     snapshots, on one chart, with each run's binarity (``void_fraction_binarity``; seed 000 Fig. 7)."""
     import numpy as np
-    from .analysis.mixing import void_fraction_binarity
     from .analysis.plots import _pyplot, _save
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     for r in runs:
-        values = void_fraction_samples(r["folder"], below)
-        if values.size:
-            counts, edges = np.histogram(values, bins=20, range=(0.0, 1.0), density=True)
-            ax.step(0.5 * (edges[1:] + edges[:-1]), counts, where="mid",
-                    label=f"{r['name']} (binarity {void_fraction_binarity(values):.2f})")
+        record = void_fraction_record(r["folder"], below)
+        if record is not None:
+            edges = np.asarray(record["edges"])
+            binarity = "-" if record["binarity"] is None else f"{record['binarity']:.2f}"
+            ax.step(0.5 * (edges[1:] + edges[:-1]), record["density"], where="mid",
+                    label=f"{r['name']} (binarity {binarity})")
     ax.set_xlabel("cell void fraction")
     ax.set_ylabel("probability density")
     ax.set_title(f"cells below z = {below} m, second half of the run")
@@ -735,6 +768,8 @@ def report(out) -> list:
     from .analysis.plots import plot_mixing, plot_t95
     out = Path(out)
     result = json.loads((out / "study.json").read_text())
+    for r in result["runs"]:  # an archive's folders are relative to it (fvdem study DIR --archive DEST)
+        r["folder"] = str(out / r["folder"]) if not Path(r["folder"]).is_absolute() else r["folder"]
     runs = [r for r in result["runs"] if r["status"] != "failed" and (Path(r["folder"]) / "timeseries.csv").exists()]
     paths = []
     for family in sorted({r["family"] for r in runs}):
@@ -750,7 +785,6 @@ def report(out) -> list:
             paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{tag}.png"))
             if figure == "fig3":
                 paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{tag}.png"))
-    from .analysis.mixing import void_fraction_binarity
     rows = []
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"
@@ -760,18 +794,23 @@ def report(out) -> list:
             # a run in progress: what its time series holds (the summary of an earlier stop is stale)
             data = _so_far(series)
             r = {**r, "t95": data["t95"]}
-        samples = void_fraction_samples(r["folder"]) if r["status"] != "failed" else []
-        binarity = void_fraction_binarity(samples) if len(samples) else None
+        record = void_fraction_record(r["folder"]) if r["status"] != "failed" else None
+        binarity = None if record is None else record["binarity"]
         entropy = float(series["mixing_entropy"][-1]) if series is not None and "mixing_entropy" in series else None
+        passes = _inlet_passes_umf(Path(r["folder"]))
+        t95 = r.get("t95")
         rows.append({"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"],
-                     "t95": r.get("t95"), "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
+                     "t95": t95, "inlet_passes_umf": passes,
+                     "t95_from_inlet_at_umf": None if t95 is None or passes is None else t95 - passes,
+                     "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
                      "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
                                                        if "bed_pressure_drop_std_second_half" in data
                                                        else data.get("pressure_drop_std_over_weight")),
                      "bed_height": _bed_surface(series), "wall_seconds": data.get("wall_seconds"),
                      "simulated_seconds": data.get("simulated_time"),
                      "final_mixing_entropy": entropy,
-                     "void_fraction_binarity": None if binarity is None or math.isnan(binarity) else binarity})
+                     "replica": r.get("replica") or int((re.search(r"_r(\d+)$", r["name"]) or [0, 1])[1]),
+                     "void_fraction_binarity": binarity})
     (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
     columns = list(dict.fromkeys(k for row in rows for k in row))
     lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
@@ -779,6 +818,65 @@ def report(out) -> list:
     findings = check_findings(rows)
     (out / "findings.json").write_text(json.dumps(findings, indent=1) + "\n")
     return paths + [out / "table.csv", out / "table.json", out / "findings.json"]
+
+
+# --------------------------------------------------------------------------- archive (compact results)
+ARCHIVED_COLUMNS = ("time", "mixing_entropy", "lacey_index", "pressure_drop_over_weight", "bed_pressure_drop",
+                    "bed_top", "rms_speed", "max_overlap_over_diameter")
+ARCHIVED_SUMMARY = ("case", "simulated_time", "steps", "settled", "stopped_early", "threads", "wall_seconds",
+                    "cpu_seconds", "timings", "provenance", "t95", "pressure_drop_over_weight",
+                    "bed_pressure_drop_std_second_half", "bed_weight_per_area", "bed_height", "mixing_cells",
+                    "peak_memory_mb")
+
+
+def archive(out, dest) -> list:
+    """The compact results of a study folder's runs in ``dest`` (small enough to commit, e.g. under
+    ``docs/data/``): per run its ``case.toml``, its time series thinned to ``ARCHIVED_COLUMNS`` (6
+    significant digits), its summary's ``ARCHIVED_SUMMARY`` keys, its void-fraction record (histogram
+    below 0.3 m, binarity) and its ``run.log``; plus the study's ``study.json`` (folders relative to
+    ``dest``) and ``study.toml``, and the report made from them. No checkpoints, states or VTU files.
+    ``fvdem study DEST --report`` rebuilds the report and findings from ``dest`` alone. A run already in
+    ``dest`` is replaced only by one that holds more simulated time. Returns the files written."""
+    out, dest = Path(out), Path(dest)
+    index = json.loads((out / "study.json").read_text())
+    dest.mkdir(parents=True, exist_ok=True)
+    kept = json.loads((dest / "study.json").read_text()) if (dest / "study.json").exists() else {"runs": []}
+    runs = {r["name"]: r for r in kept["runs"]}
+    written = []
+    for r in index["runs"]:
+        folder = Path(r["folder"])
+        series = _series(folder)
+        if series is None:
+            continue
+        target = dest / "runs" / r["name"]
+        held = _simulated_so_far(target, live=True) if target.exists() else -1.0
+        if float(series["time"][-1]) <= held:
+            continue  # what the archive holds is as far along (a later invocation lost nothing)
+        target.mkdir(parents=True, exist_ok=True)
+        columns = [c for c in ARCHIVED_COLUMNS if c in series]
+        rows = zip(*(series[c] for c in columns))
+        (target / "timeseries.csv").write_text(",".join(columns) + "\n" + "".join(
+            ",".join(f"{v:.6g}" for v in row) + "\n" for row in rows))
+        if (folder / "summary.json").exists():
+            summary = json.loads((folder / "summary.json").read_text())
+            summary = {k: summary[k] for k in ARCHIVED_SUMMARY if k in summary}
+            if series is not None and summary.get("stopped_early"):
+                summary.update(_so_far(series))
+            (target / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+        for name in ("case.toml", "run.log"):
+            if (folder / name).exists():
+                (target / name).write_text((folder / name).read_text())
+        record = void_fraction_record(folder)
+        if record is not None:
+            (target / VOID_FRACTION).write_text(json.dumps(record) + "\n")
+        runs[r["name"]] = {**r, "folder": f"runs/{r['name']}", "simulated_seconds": float(series["time"][-1])}
+        written.append(target)
+    (dest / "study.json").write_text(json.dumps({**{k: v for k, v in index.items() if k != "runs"},
+                                                 "archived_from": str(out), "runs": list(runs.values())}, indent=1)
+                                     + "\n")
+    if (out / "study.toml").exists():
+        (dest / "study.toml").write_text((out / "study.toml").read_text())
+    return written + report(dest)
 
 
 # seed 000's findings (§5-§6) that a study's t95 table can check; each rule sees the runs by family

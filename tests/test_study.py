@@ -572,3 +572,71 @@ def test_a_familys_own_replicas_and_a_wrong_count(tmp_path):
     with pytest.raises(CaseError) as err:
         load_study(path, tmp_path / "out")
     assert "families.ar1.replicas = 0" in str(err.value)
+
+
+def _fake_run(folder, family, ratio, entropy_rate, voidage):
+    """A finished run folder as a study leaves it: case, time series, summary, log, gas snapshots, a state."""
+    import meshio
+    import numpy as np
+    folder.mkdir(parents=True)
+    (folder / "case.toml").write_text(f'name = "{family}"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = {ratio}\n')
+    t = np.linspace(0.0, 4.0, 401)
+    columns = {"time": t, "kinetic_energy": 1e-3 + 0 * t, "mixing_entropy": 1 - np.exp(-entropy_rate * t),
+               "pressure_drop_over_weight": 1.0 + 0.2 * np.sin(7 * t), "bed_top": 0.4 + 0.02 * np.sin(3 * t)}
+    (folder / "timeseries.csv").write_text(",".join(columns) + "\n" + "".join(
+        ",".join(repr(float(c[k])) for c in columns.values()) + "\n" for k in range(len(t))))
+    (folder / "summary.json").write_text(json.dumps({"simulated_time": 4.0, "wall_seconds": 100.0, "t95": None,
+                                                     "bed_pressure_drop_std_second_half": 150.0,
+                                                     "bed_weight_per_area": 1000.0, "pressure_drop_over_weight": 1.0,
+                                                     "provenance": {"fvdem": "x"}, "timings": {"total": 100.0}}))
+    (folder / "run.log").write_text("started\nreached its end\n")
+    (folder / "checkpoint.npz").write_bytes(b"not small in a real run")
+    x, y, z = np.meshgrid(np.linspace(0, 0.15, 3), np.linspace(0, 0.15, 3), np.linspace(0, 0.6, 5), indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+    index = np.arange(points.shape[0]).reshape(x.shape)
+    cells = [[index[i, j, k], index[i + 1, j, k], index[i + 1, j + 1, k], index[i, j + 1, k], index[i, j, k + 1],
+              index[i + 1, j, k + 1], index[i + 1, j + 1, k + 1], index[i, j + 1, k + 1]]
+             for i in range(2) for j in range(2) for k in range(4)]
+    for snapshot in range(4):
+        values = np.asarray(voidage, float)[(np.arange(16) + snapshot) % len(voidage)]
+        meshio.write(folder / f"gas_{snapshot:05d}.vtu", meshio.Mesh(points, [("hexahedron", cells)],
+                                                                  cell_data={"voidage": [values]}))
+
+
+def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_the_run_folders(tmp_path):
+    """fvdem study DIR --archive DEST: time series, summaries, void-fraction records and logs, no states or
+    VTU; the report and findings made from DEST alone equal the ones made from the run folders."""
+    import shutil
+
+    from fvdem.cli import main
+    from fvdem.study import report
+    out = tmp_path / "study"
+    runs = []
+    for family, ratio, rate, voidage in (("ar1", 2.0, 0.5, [0.4, 0.42, 0.98, 1.0]),
+                                         ("ar4_mp", 2.0, 1.2, [0.5, 0.6, 0.7, 0.8])):
+        folder = out / "runs" / f"{family}_u_over_umf{ratio:g}"
+        _fake_run(folder, family, ratio, rate, voidage)
+        runs.append({"name": folder.name, "family": family, "status": "finished", "folder": str(folder),
+                     "t95": None, "point": {"gas.u_over_umf": ratio}, "replica": 1})
+    (out / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    (out / "study.toml").write_text('name = "t"\n')
+    report(out)
+    table, findings = (json.loads((out / name).read_text()) for name in ("table.json", "findings.json"))
+    assert {r["family"]: r["void_fraction_binarity"] is not None for r in table} == {"ar1": True, "ar4_mp": True}
+    dest = tmp_path / "docs" / "data" / "t"
+    assert main(["study", str(out), "--archive", str(dest)]) == 0
+    files = [p for p in dest.rglob("*") if p.is_file()]
+    assert not [p for p in files if p.suffix in (".vtu", ".npz", ".pvd")]
+    assert sum(p.stat().st_size for p in files) < 400_000
+    shutil.rmtree(out)  # the run folders are gone: the archive alone
+    assert main(["study", str(dest), "--report"]) == 0
+    again = json.loads((dest / "table.json").read_text())
+    def rounded(value):  # the archive keeps 6 significant digits
+        if isinstance(value, float):
+            return float(f"{value:.4g}")
+        if isinstance(value, dict):
+            return {k: rounded(v) for k, v in value.items()}
+        return [rounded(v) for v in value] if isinstance(value, list) else value
+    assert rounded(json.loads((dest / "findings.json").read_text())) == rounded(findings)
+    assert rounded(table) == rounded(again)
+    assert (dest / "runs" / "ar1_u_over_umf2" / "run.log").exists() and (dest / "fig7_void_fraction_2.png").exists()
