@@ -8,7 +8,7 @@ Library use::
     sim.run(0.05)
     print(sim.diagnostics())
 """
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 import os as _os  # noqa: E402
 

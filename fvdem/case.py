@@ -149,7 +149,7 @@ class ParticlesConfig:
 class ContactConfig:
     normal_stiffness: float = spec(800.0, unit="stiffness", gt=0.0,
                                    doc="linear normal spring k_n [N/m] (default from the speed-accuracy front, "
-                                       "docs/speed-accuracy.md; seed 000: 2e4 with dem_step 1e-5)")
+                                       "docs/speed-accuracy.md; Mema et al. (2020): 2e4 with dem_step 1e-5)")
     restitution: float = spec(0.43, gt=0.0, le=1.0, doc="coefficient of restitution e in (0, 1]")
     friction: float = spec(0.46, ge=0.0, doc="sliding friction coefficient mu")
     rolling_friction: float = spec(0.46, ge=0.0, doc="rolling friction coefficient mu_r (CDT model)")
@@ -163,8 +163,8 @@ class ContactConfig:
 @dataclass(frozen=True)
 class TimeConfig:
     dem_step: float = spec(5.0e-5, unit="time", gt=0.0,
-                           doc="DEM time step [s] (default: 1/14 of the default spring's collision time for seed "
-                               "000's particles; seed 000: 1e-5)")
+                           doc="DEM time step [s] (default: 1/14 of the default spring's collision time for the "
+                               "paper's particles; Mema et al. (2020): 1e-5)")
     end: float = spec(0.1, unit="time", gt=0.0, doc="simulated end time [s]")
     stop_when_settled: bool = spec(False, kind="bool", doc="end early once the bed is at rest")
     settled_speed: float = spec(0.005, unit="velocity", gt=0.0,
@@ -209,12 +209,12 @@ class GasConfig:
                                  "as one plug into the roof (issue 17: 16 % of a 32,500-sphere bed pinned there at "
                                  "2.9 Umf); a 1 s ramp kept every particle off the roof")
     umf: float | None = spec(None, unit="velocity", gt=0.0, optional=True,
-                             doc="minimum fluidization velocity [m/s] that u_over_umf refers to (seed 000: "
+                             doc="minimum fluidization velocity [m/s] that u_over_umf refers to (Mema et al. (2020): "
                                  "1.58 m/s AR-1, 1.7 m/s AR-4)")
     walls: str = spec("no-slip", kind="str", choices=("no-slip", "free-slip"), doc="side-wall condition")
     cfd_step: float = spec(5.0e-4, unit="time", gt=0.0,
                            doc="CFD time step [s] = coupling interval (default from the speed-accuracy front; "
-                               "seed 000: 1e-4)")
+                               "Mema et al. (2020): 1e-4)")
     scheme: str = spec("piso", kind="str", choices=("piso", "simple"), doc="pressure-velocity coupling")
     correctors: int = spec(2, kind="int", ge=1, le=100, doc="PISO pressure corrections per step")
     linear_solver: str = spec("iterative", kind="str", choices=("iterative", "direct"))
@@ -250,7 +250,7 @@ class GasConfig:
 class CouplingConfig:
     enabled: bool = spec(True, kind="bool", doc="exchange momentum between gas and particles (when both are present)")
     drag: str = spec("hoelzer-sommerfeld", kind="str", registry="drag",
-                     doc="drag closure. Gas-fluidized coarse beds: the paper's laws to reproduce seed 000, 'gidaspow' "
+                     doc="drag closure. Gas-fluidized coarse beds: the paper's laws to reproduce Mema et al. (2020), 'gidaspow' "
                          "for Umf (simulated in the paper's bed: spheres 1.59-1.75 m/s against the measured 1.58, "
                          "the closure's Umf at the packing the bed collapses to, 0.577-0.537; AR-4 rods 1.61 "
                          "against 1.7; the particle-resolved laws 35-113 % above for spheres); liquid suspensions: "
@@ -276,11 +276,11 @@ class CouplingConfig:
 @dataclass(frozen=True)
 class SuspensionConfig:
     enabled: bool = spec(False, kind="bool",
-                         doc="set the case up from seed 004's dimensionless scene: a fully periodic box of "
+                         doc="set the case up from Derksen's dimensionless scene: a fully periodic box of "
                              "liquid and identical particles held up by a mean pressure gradient (derives "
                              "domain, particles, liquid, gradient, contact stiffness and steps)")
     particle: str = spec("cylinder", kind="str", choices=("cylinder", "sphere"),
-                         doc="'cylinder': seed 004's flat-ended cylinder of aspect ratio l/d, modelled as the "
+                         doc="'cylinder': Derksen's flat-ended cylinder of aspect ratio l/d, modelled as the "
                              "spherocylinder of equal diameter and volume (length l + d/3); 'sphere': diameter d")
     aspect_ratio: float = spec(2.0, gt=2.0 / 3.0, le=10.0, doc="cylinder length over diameter l/d")
     density_ratio: float = spec(2.0, gt=1.0, doc="particle over liquid density gamma")
@@ -289,7 +289,7 @@ class SuspensionConfig:
                                             doc="Ga_e = g d_e^3 / nu^2 on the volume-equivalent diameter "
                                                 "d_e = (3 l d^2 / 2)^(1/3)")
     solids_fraction: float = spec(0.2, gt=0.0, le=0.55, doc="mean solids volume fraction <phi>")
-    box: tuple = spec((9.0, 9.0, 18.0), kind="vec3", gt=0.0, doc="box size in diameters d (seed 004: 9 x 9 x 18)")
+    box: tuple = spec((9.0, 9.0, 18.0), kind="vec3", gt=0.0, doc="box size in diameters d (Derksen: 9 x 9 x 18)")
     cells: tuple = spec((3, 3, 6), kind="int3", ge=1, le=10000, doc="liquid grid cells along x, y, z")
     diameter: float = spec(1.0e-3, unit="length", gt=0.0, doc="particle diameter d [m]: sets the dimensional scale")
     liquid_density: float = spec(1000.0, unit="density", gt=0.0, doc="liquid density rho [kg/m^3]")

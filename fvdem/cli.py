@@ -301,7 +301,7 @@ def make_parser() -> argparse.ArgumentParser:
     report.add_argument("out", help="a run folder (the --out of fvdem run); the plots are written into it")
     report.set_defaults(func=cmd_report)
     compare = sub.add_parser("compare", help="several runs on one chart: mixing entropy against time and "
-                                             "t95 against U/Umf (seed 000 Figs. 2-4)")
+                                             "t95 against U/Umf (Mema et al. (2020) Figs. 2-4)")
     compare.add_argument("runs", nargs="+", help="run folders")
     compare.add_argument("--out", default=".", help="folder for mixing_compare.png and t95.png")
     compare.set_defaults(func=cmd_compare)

@@ -8,6 +8,7 @@ Writers only read the state, so a run resumed from a checkpoint continues bit-fo
 from __future__ import annotations
 
 import contextlib
+import resource
 import signal
 import time as _time
 from dataclasses import asdict
@@ -173,7 +174,9 @@ class Simulation:
                    "settled": self.run_state.settled, "stopped_early": self._stop_requested, "threads": self.threads,
                    "wall_seconds": self.run_state.wall_seconds, "cpu_seconds": self.run_state.cpu_seconds,
                    "timings": self.model.timings.table(self.run_state.wall_seconds),
-                   "provenance": provenance(self.threads)}
+                   "provenance": provenance(self.threads),
+                   # the process's peak resident memory so far (a study worker's: its largest run's)
+                   "peak_memory_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
         summary.update(self.scene.summary(self.model, self.diagnostics(), self.run_state.histories,
                                           {"steps": steps, "wall": wall}))
         return summary

@@ -740,7 +740,7 @@ def void_fraction_record(folder, below=0.3) -> dict | None:
 
 def plot_void_fractions(runs, path, below=0.3):
     """Histograms of the cell void fraction below ``below`` [m] over the second half of each run's gas
-    snapshots, on one chart, with each run's binarity (``void_fraction_binarity``; seed 000 Fig. 7)."""
+    snapshots, on one chart, with each run's binarity (``void_fraction_binarity``; Mema et al. (2020) Fig. 7)."""
     import numpy as np
     from .analysis.plots import _pyplot, _save
     plt = _pyplot()
@@ -762,7 +762,7 @@ def plot_void_fractions(runs, path, below=0.3):
 
 def report(out) -> list:
     """The study's figures and table from its run folders: mixing entropy against time per family
-    (seed 000 Fig. 2), t95 against U/Umf (Fig. 4), AR-1 against AR-4 MP (Fig. 3) with their void
+    (Mema et al. (2020) Fig. 2), t95 against U/Umf (Fig. 4), AR-1 against AR-4 MP (Fig. 3) with their void
     fractions below 0.3 m (Fig. 7) and AR-4 MP drag only against drag + lift + torque (Fig. 9) at each
     velocity both ran, ``table.csv`` / ``table.json``, and ``findings.json`` (``check_findings``)."""
     from .analysis.plots import plot_mixing, plot_t95
@@ -777,7 +777,7 @@ def report(out) -> list:
                                  out / f"mixing_{family}.png"))
     if runs:
         paths.append(plot_t95([Path(r["folder"]) for r in runs], out / "t95.png", names=[r["family"] for r in runs]))
-    # seed 000 Fig. 3 (AR-1 against AR-4 MP) and Fig. 9 (AR-4 MP drag only against drag + lift + torque)
+    # Mema et al. (2020) Fig. 3 (AR-1 against AR-4 MP) and Fig. 9 (AR-4 MP drag only against drag + lift + torque)
     # at each velocity both families ran; Fig. 7 (void fractions below 0.3 m) of the same pairs
     for figure, (first, second) in (("fig3", ("ar1", "ar4_mp")), ("fig9", ("ar4_mp_drag", "ar4_mp"))):
         for point, pair in sorted(_pairs(runs, first, second).items()):
@@ -879,7 +879,7 @@ def archive(out, dest) -> list:
     return written + report(dest)
 
 
-# seed 000's findings (§5-§6) that a study's t95 table can check; each rule sees the runs by family
+# Mema et al.'s findings (§5-§6) that a study's t95 table can check; each rule sees the runs by family
 CLOSE = 0.10  # relative differences below this need replicas to be told from chaos
 TERMINAL = 0.25  # a terminal t95 within this of the paper's "about" value holds
 SETTINGS_TOLERANCE = 0.15  # t95 at the defaults within this of t95 at the paper's settings: no change
@@ -982,7 +982,7 @@ def _compare(rows, faster, slower, velocities, claim):
 
 
 def check_findings(rows) -> list:
-    """Each finding of seed 000 (§5-§6), with fvdem's numbers and one word: holds, does not hold, or
+    """Each finding of Mema et al. (2020) (§5-§6), with fvdem's numbers and one word: holds, does not hold, or
     open (and why: runs missing, too short to mix, or differences within the noise without replicas).
     From the t95 table: AR-4 against AR-1 up to 2 Umf, lift and torque, SP against MP, the terminal t95
     and its change above 2.3 Umf; from the gas snapshots: AR-1's void fractions more binary than AR-4's

@@ -44,6 +44,14 @@ def test_version_names_the_release_and_the_commit():
         assert "commit " in result.stdout
 
 
+def test_the_version_is_the_newest_release_in_the_changelog():
+    import re
+
+    from fvdem import __version__
+    releases = re.findall(r"^## \[(\d+\.\d+\.\d+)\]", (ROOT / "CHANGELOG.md").read_text(), re.M)
+    assert releases and releases[0] == __version__
+
+
 def test_every_option_and_argument_has_help():
     missing = []
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark the DEM on the settled 32,500-particle beds of seed 000 (no gas).
+"""Benchmark the DEM on the settled 32,500-particle beds of Mema et al. (2020) (no gas).
 
 Usage:
     python tools/bench_dem.py [--json] [--steps 300] [--shapes sphere spherocylinder]

@@ -2,16 +2,16 @@
 
 For each registered drag law (``fvdem laws drag``):
 
-- **Umf of seed 000's beds**: the superficial velocity at which the law alone holds a *uniform* bed of
+- **Umf of Mema et al.'s beds**: the superficial velocity at which the law alone holds a *uniform* bed of
   the packing of fvdem's settled beds (``cases/bed_ar1.toml``, ``cases/bed_ar4.toml``: core solids
   fraction and particle axes, recorded in ``tools/data/settled_beds.json`` by ``--measure-beds``),
   ``fvdem.analysis.bed.uniform_bed_umf``; beside Ergun's at the same packing (with the rods'
   sphericity) and the measured 1.58 (AR-1) and 1.7 m/s (AR-4).
-- **Homogeneous hindered settling**: model A's balance of a particle in seed 004's force-balanced
+- **Homogeneous hindered settling**: model A's balance of a particle in Derksen's force-balanced
   periodic box, ``c(u) u = (1 - phi) V_p (rho_p - rho) g`` (drag = weight less the mixture's buoyancy;
   averaged over isotropic orientations), solved for the interstitial slip ``u``; reported as the
   slip Reynolds number ``Re = (1 - phi) u d_e / nu`` that fvdem's suspension runs measure, at Ga = 864
-  (on d) and Ga_e = 1296 (on d_e), for l/d = 1 (spheres), 2 and 4 (seed 004's cylinders as
+  (on d) and Ga_e = 1296 (on d_e), for l/d = 1 (spheres), 2 and 4 (Derksen's cylinders as
   equal-volume spherocylinders) and phi = 0.1-0.48; beside Richardson-Zaki
   ``Re_t (1 - phi)^N``, ``N = 4.45 Re_t^-0.1``, with ``Re_t`` the isolated particle's terminal Re under
   Hoelzer-Sommerfeld (one reference curve for all laws).
@@ -125,7 +125,7 @@ def _table(case_file):
 
 # --------------------------------------------------------------------------- homogeneous hindered settling
 def suspension_case(ratio, galileo, phi, drag):
-    """Seed 004's suspension (cases/hindered_settling.toml) at l/d ``ratio`` (1: spheres)."""
+    """Derksen's suspension (cases/hindered_settling.toml) at l/d ``ratio`` (1: spheres)."""
     import tomllib
     table = tomllib.loads((ROOT / "cases" / "hindered_settling.toml").read_text())
     s = table["suspension"]
@@ -211,7 +211,7 @@ def chart(result, path):
     ax.set_xticks([0, 1], [f"AR-1 (solids {result['beds']['ar1']['solids_fraction']:.3f})",
                            f"AR-4 (solids {result['beds']['ar4']['solids_fraction']:.3f})"])
     ax.set_ylabel("uniform-bed Umf [m/s]")
-    ax.set_title("seed 000's beds: measured (-), Ergun (--)", fontsize=9)
+    ax.set_title("Mema et al.'s beds: measured (-), Ergun (--)", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3, axis="y")
     for ax, galileo, title in ((axes[1], "ga_864", "Ga = 864 (on d)"), (axes[2], "ga_e_1296", "Ga_e = 1296 (on d_e)")):

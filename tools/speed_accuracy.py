@@ -1,7 +1,7 @@
 """Speed against accuracy on a reduced fluidized bed (issue 7, part 1).
 
-A reduced but representative bed of seed 000's particles (2,000 AR-1 spheres or 2,000 AR-4
-spherocylinders in a 0.06 x 0.06 x 0.45 m column, seed 000's 15 mm cells, two colour layers,
+A reduced but representative bed of Mema et al.'s particles (2,000 AR-1 spheres or 2,000 AR-4
+spherocylinders in a 0.06 x 0.06 x 0.45 m column, Mema et al.'s 15 mm cells, two colour layers,
 2 Umf from a loosely inserted start) is run at the paper's settings (the reference: DEM step 1e-5 s,
 k_n 2e4 N/m, CFD step 1e-4 s, 15 mm cells, divided voidage, 2 threads; AR-4 with the multi-particle
 drag, lift and torque) and in variants that trade accuracy for speed, one setting at a time and in

@@ -1,6 +1,6 @@
-"""Hindered settling of a periodic suspension against Richardson-Zaki (issue 6, seed 004).
+"""Hindered settling of a periodic suspension against Richardson-Zaki (issue 6, Derksen).
 
-For one particle shape (seed 004's cylinders of aspect ratio l/d, as equal-volume spherocylinders, or
+For one particle shape (Derksen's cylinders of aspect ratio l/d, as equal-volume spherocylinders, or
 spheres) and one Galileo number, runs the fully periodic, force-balanced suspension of
 ``cases/hindered_settling.toml`` at mean solids fractions 0.1, 0.2, 0.29, 0.4, 0.48, takes each run's
 slip Reynolds number ``Re = (<u_z> - <u_pz>) d_e / nu`` over its automatically chosen steady window
@@ -13,7 +13,7 @@ from the drag balance, independent of the suspension runs).
     python tools/validate_hindered_settling.py --aspect-ratio 4 --ga 864 --json
     python tools/validate_hindered_settling.py --sphere --ga 864 --json
 
-The box is seed 004's 9 d x 9 d x 18 d where the periodic neighbour search allows it (box at least
+The box is Derksen's 9 d x 9 d x 18 d where the periodic neighbour search allows it (box at least
 3 x the particle length plus skin), else the smallest n d x n d x 2n d that does (14 x 14 x 28 for
 l/d = 4); cells about 3 d. Writes ``hindered_<tag>_re.png`` (Re against 1 - phi, log axes),
 ``hindered_<tag>_orientation.png`` and ``hindered_<tag>_fluctuations.png``, and prints as its last
@@ -94,7 +94,7 @@ def terminal_reynolds(table):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--aspect-ratio", type=float, default=2.0, help="cylinder l/d (1, 2, 4 in seed 004)")
+    parser.add_argument("--aspect-ratio", type=float, default=2.0, help="cylinder l/d (1, 2, 4 in Derksen)")
     parser.add_argument("--sphere", action="store_true", help="spheres instead of cylinders")
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--ga", type=float, help="Galileo number on d")

@@ -1,7 +1,7 @@
 """Minimum fluidization velocity from a defluidization ramp (issue 5).
 
-A shallow bed of seed 000's particles (spheres, or AR-4 spherocylinders with single- or
-multi-particle closures) in a narrow column with seed 000's 15 mm cells is fluidized above Umf,
+A shallow bed of Mema et al.'s particles (spheres, or AR-4 spherocylinders with single- or
+multi-particle closures) in a narrow column with Mema et al.'s 15 mm cells is fluidized above Umf,
 then the gas velocity is stepped down to about 0.4 Umf; each velocity is held and the bed pressure
 drop averaged over the second half of the hold. Umf is where the fixed-bed branch (least-squares
 ``dP = a U + b U^2``, Ergun's form with a, b >= 0, through the lowest velocities up to the first
@@ -21,7 +21,7 @@ The output also separates the closure from the CFD-DEM solution: the packing of 
 (core solids fraction, wall regions kept; mean sin^2 of the rods' angle from the vertical) and
 ``umf_closure_uniform_bed``, the velocity at which the drag closure alone holds a uniform bed of that
 packing (``fvdem.analysis.bed.uniform_bed_umf``), next to Ergun's at the same packing. ``--drag gidaspow``
-repeats the ramp with Gidaspow's closure (Ergun / Wen-Yu) instead of seed 000's.
+repeats the ramp with Gidaspow's closure (Ergun / Wen-Yu) instead of Mema et al.'s.
 
     python tools/validate_umf.py --shape sphere --json
     python tools/validate_umf.py --shape spherocylinder --closures mp --json
@@ -69,7 +69,7 @@ def build_case(shape, closures, particles, threads, width=0.06, settings="paper"
 
 
 def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings="paper", drag="paper"):
-    """Case table of the reduced bed (also tools/speed_accuracy.py's): seed 000's particles (AR-1, or AR-4
+    """Case table of the reduced bed (also tools/speed_accuracy.py's): Mema et al.'s particles (AR-1, or AR-4
     with SP or MP closures) in a ``width`` square column of 15 mm cells at 2 Umf,experiment, inserted
     below 0.2 m (higher when more particles than 2,000 per 0.06 x 0.06 m need the room); the column is
     0.45 m tall, or the insertion height + 0.3 m, or twice the insertion height, whichever is tallest
@@ -365,9 +365,9 @@ def main(argv=None):
     parser.add_argument("--width", type=float, default=0.06, help="column width [m] (a multiple of the 15 mm cells); "
                         "scale --particles with the cross-section to keep the bed height")
     parser.add_argument("--settings", choices=tuple(SETTINGS), default="paper",
-                        help="contact stiffness, DEM and CFD steps: seed 000's or fvdem's defaults")
+                        help="contact stiffness, DEM and CFD steps: Mema et al.'s or fvdem's defaults")
     parser.add_argument("--drag", nargs="+", choices=("paper",) + tuple(n for n in law_names("drag") if n != "none"),
-                        default=["paper"], help="drag closure(s): seed 000's (Hoelzer-Sommerfeld + Di Felice, or "
+                        default=["paper"], help="drag closure(s): Mema et al.'s (Hoelzer-Sommerfeld + Di Felice, or "
                         "Sanjeevi-Padding for --closures mp) or any registered law (fvdem laws drag), lift and "
                         "torque kept; several give one ramp each")
     parser.add_argument("--workers", type=int, default=1, help="ramps side by side (several ramps only): Dask "

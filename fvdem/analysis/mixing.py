@@ -1,4 +1,4 @@
-"""Mixing of a two-colour bed (seed 000, §4; MODEL.md §5).
+"""Mixing of a two-colour bed (Mema et al., 2020, §4; docs/equations.md §5).
 
 Particles are binned by centre into a coarse analysis grid (5 x 5 x 35 for the paper's column).
 In each cell with particles, ``S = -x1 ln x1 - x2 ln x2`` with ``x1, x2`` the number fractions of
@@ -77,7 +77,7 @@ def orientation_angles(axis) -> np.ndarray:
 
 
 def void_fraction_binarity(values, packed_percentile: float = 2.0) -> float:
-    """How binary a set of cell void fractions is (seed 000 Fig. 7: AR-1's "more binary" than AR-4's):
+    """How binary a set of cell void fractions is (Mema et al. (2020) Fig. 7: AR-1's "more binary" than AR-4's):
     the variance as a fraction of the largest a variable of the same mean can have between the packed
     voidage ``a`` (the ``packed_percentile``-th percentile of the values) and 1,
 

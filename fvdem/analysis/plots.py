@@ -110,7 +110,7 @@ def plot_gas_profile(out) -> Path:
 
 def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path:
     """Side view (x-z) of the particles in a slab around the mid-plane y, coloured by tracer colour
-    (as in Fig. 1 of seed 000)."""
+    (as in Fig. 1 of Mema et al. (2020))."""
     plt = _pyplot()
     with np.load(Path(out) / state_file) as data:
         pos, colour, radius = data["position"], data["colour"], data["radius"]
@@ -135,7 +135,7 @@ def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path
 
 
 def plot_mixing(runs, path, level=0.95) -> Path:
-    """Mixing entropy against time for one or more run folders on one chart (seed 000 Figs. 2-3),
+    """Mixing entropy against time for one or more run folders on one chart (Mema et al. (2020) Figs. 2-3),
     the t95 of each marked."""
     from .mixing import mixing_time
     plt = _pyplot()
@@ -161,7 +161,7 @@ def plot_mixing(runs, path, level=0.95) -> Path:
 def mixing_times(runs, level=0.95, names=None) -> dict:
     """``{name: [(U/Umf, t95 or None, simulated end), ...]}`` of run folders (their case.toml and
     timeseries.csv), sorted by U/Umf (runs at the same U/Umf, such as replicas, by t95, unmixed last):
-    the data of seed 000's Fig. 4. ``names``: the group of each run (a study's families); by default
+    the data of Mema et al.'s Fig. 4. ``names``: the group of each run (a study's families); by default
     its case name."""
     from ..case import load_case
     from .mixing import mixing_time
@@ -180,7 +180,7 @@ def mixing_times(runs, level=0.95, names=None) -> dict:
 
 def plot_t95(runs, path, level=0.95, names=None) -> Path:
     """Mixing time t95 against U/Umf, one line per case name (or per ``names``, the group of each
-    run; seed 000 Fig. 4). A run that has not reached the level is drawn as an open triangle at its
+    run; Mema et al. (2020) Fig. 4). A run that has not reached the level is drawn as an open triangle at its
     end time: t95 is later than that."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
@@ -200,7 +200,7 @@ def plot_t95(runs, path, level=0.95, names=None) -> Path:
 
 def plot_void_fraction_histogram(out, below=0.3) -> Path:
     """Histogram of the cell voidage below ``below`` [m] and inside the bed (``cells_in_bed``: the empty
-    freeboard of a bed lower than ``below`` left out) over all gas snapshots (seed 000 Fig. 7)."""
+    freeboard of a bed lower than ``below`` left out) over all gas snapshots (Mema et al. (2020) Fig. 7)."""
     import meshio
     from .mixing import cells_in_bed
     plt = _pyplot()

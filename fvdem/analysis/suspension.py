@@ -1,7 +1,7 @@
-"""Observables of a periodic suspension (seed 004): slip Reynolds number, velocity fluctuations,
+"""Observables of a periodic suspension (Derksen): slip Reynolds number, velocity fluctuations,
 orientation distribution, and the automatic choice of a statistically steady window.
 
-Slip velocity. Seed 004 defines ``Re = (<u_z> - <u_pz>) d_e / nu`` with ``<u_z>`` the liquid
+Slip velocity. Derksen defines ``Re = (<u_z> - <u_pz>) d_e / nu`` with ``<u_z>`` the liquid
 velocity averaged over the whole box, particle interiors included (its immersed-boundary fluid
 moves with the particles there), so ``<u_z> = (1 - phi) u_f + phi u_p`` is the mixture's volume
 flux and ``<u_z> - <u_pz> = (1 - phi) (u_f - u_p)`` -- the settling velocity of a Richardson-Zaki

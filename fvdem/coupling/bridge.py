@@ -29,7 +29,7 @@ Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
    per cent), so that gas plus particle momentum, the pending return included, changes by the
    external forces only, to round-off.
 
-Torque is not fed back to the gas (MODEL.md §2). A sphere case evaluates no lift or torque.
+Torque is not fed back to the gas (docs/equations.md §2). A sphere case evaluates no lift or torque.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Hydrodynamic closures of seed 000 (MODEL.md §3, Table 1) as pure functions.
+"""Hydrodynamic closures of Mema et al. (2020) (docs/equations.md §3, Table 1) as pure functions.
 
 Each function takes local, per-particle quantities as numpy arrays (or floats) and returns forces,
 coefficients or directions; none keeps state. Notation: ``u`` the slip velocity (gas interstitial
@@ -6,7 +6,7 @@ velocity minus particle velocity) [m/s], ``eps`` the local voidage, ``d_p`` the 
 diameter [m], ``rho`` and ``mu`` the gas density [kg/m^3] and viscosity [Pa s], ``axis`` the unit
 particle axis, ``theta`` / ``phi`` the angle between axis and slip [rad].
 
-Choices on the points MODEL.md flags as ambiguous (each pinned by a test in
+Choices on the points docs/equations.md flags as ambiguous (each pinned by a test in
 tests/test_closures.py):
 
 - Particle Reynolds number: the *superficial* slip, ``Re = rho d_p eps |u| / mu`` (Di Felice 1994,
@@ -33,7 +33,7 @@ def spherocylinder_shape(diameter, length):
 
 
 def sphericities(diameter, length, theta):
-    """Sphericity, crosswise and lengthwise sphericity (Hoelzer & Sommerfeld 2008; seed 000 Eqs. 12-14)
+    """Sphericity, crosswise and lengthwise sphericity (Hoelzer & Sommerfeld 2008; Mema et al. (2020) Eqs. 12-14)
     of a spherocylinder at angle ``theta`` [rad] between its axis and the slip velocity.
 
     ``Phi = pi^(1/3) (6 V)^(2/3) / A_p``; ``Phi_perp = A_e / ((pi/4) d^2 + d L_rod sin theta)``;
@@ -107,7 +107,7 @@ def ergun_beta_per_solids(voidage, speed, d, rho, mu):
 
 def gidaspow_drag_coefficient(slip, voidage, d_p, rho, mu, sphericity=1.0):
     """Drag coefficient ``c`` [kg/s] (N,) with ``F = c u`` of Gidaspow (1994), as in MFiX's GIDASPOW and
-    CFDEMcoupling's GidaspowDrag: not one of seed 000's closures, an alternative for dense beds.
+    CFDEMcoupling's GidaspowDrag: not one of Mema et al.'s closures, an alternative for dense beds.
 
     Written as the two-fluid interphase coefficient ``beta`` [kg/(m^3 s)] per particle,
     ``c = beta V_p / eps_s``:
@@ -325,7 +325,7 @@ def multi_particle_lift(slip, voidage, axis, d_p, rho, mu):
 
 
 def isolated_torque_magnitude(reynolds):
-    """``T_p,isol(Re)``, not given in seed 000 (flagged): matching Eq. 30 to Eq. 27 at eps_s -> 0 gives
+    """``T_p,isol(Re)``, not given in Mema et al. (2020) (flagged): matching Eq. 30 to Eq. 27 at eps_s -> 0 gives
     ``T_P,phi = C_T Re / 32``; with the sin phi cos phi dependence taken out at 45 degrees:
     ``T_p,isol = C_T,45(Re) Re / (32 sin 45 cos 45) = C_T,45 Re / 16``."""
     return zastawny_coefficient(reynolds, np.pi / 4, ZASTAWNY_TORQUE) * np.asarray(reynolds, float) / 16.0
@@ -498,7 +498,7 @@ def _hoelzer_sommerfeld(particle, slip, voidage, axis):
 
 @register("drag", "sanjeevi-padding", shapes=("spherocylinder",), aspect_ratio=4.0,
           validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",
-          reference="Sanjeevi & Padding (2020), AIChE J. 66; seed 000 Table 2",
+          reference="Sanjeevi & Padding (2020), AIChE J. 66; Mema et al. (2020) Table 2",
           summary="Sanjeevi-Padding 2020 (multi-particle, AR-4 spherocylinders)", kernel="sanjeevi_padding_drag")
 def _sanjeevi_padding_drag(particle, slip, voidage, axis):
     return multi_particle_drag_coefficient(slip, voidage, axis, particle.equivalent_diameter, particle.density,
@@ -507,7 +507,7 @@ def _sanjeevi_padding_drag(particle, slip, voidage, axis):
 
 @register("drag", "gidaspow", validity="Ergun below voidage 0.8, Wen-Yu above (Re < 1000 in the Schiller-Naumann term)",
           reference="Gidaspow (1994), Multiphase Flow and Fluidization; Ergun (1952); Wen & Yu (1966)",
-          summary="Gidaspow (Ergun below voidage 0.8 with the sphericity, Wen-Yu above; not a seed 000 closure: "
+          summary="Gidaspow (Ergun below voidage 0.8 with the sphericity, Wen-Yu above; not a Mema et al. (2020) closure: "
                   "it reproduces Ergun's packed-bed pressure drop, docs/validation.md)", kernel="gidaspow_drag")
 def _gidaspow(particle, slip, voidage, axis):
     sphericity = 1.0 if particle.is_sphere else float(sphericities(particle.diameter, particle.length, 0.0)[0])
@@ -600,9 +600,9 @@ for _kind, _single, _multi in (("lift", single_particle_lift, multi_particle_lif
                                ("torque", single_particle_torque, multi_particle_torque)):
     register(_kind, "none", summary=f"no {_kind}")(lambda particle, slip, voidage, axis: None)
     register(_kind, "zastawny", shapes=("spherocylinder",), aspect_ratio=4.0,
-             validity="isolated particle, Re 0.1-1000 (seed 000 Table 3, aspect ratio 4)",
-             reference="Zastawny et al. (2012), Int. J. Multiph. Flow 39; seed 000 Table 3",
-             summary="Zastawny form with seed 000's Table 3 (single-particle, AR-4)",
+             validity="isolated particle, Re 0.1-1000 (Mema et al. (2020) Table 3, aspect ratio 4)",
+             reference="Zastawny et al. (2012), Int. J. Multiph. Flow 39; Mema et al. (2020) Table 3",
+             summary="Zastawny form with Mema et al.'s Table 3 (single-particle, AR-4)",
              kernel=f"zastawny_{_kind}")(_oriented(_single))
     register(_kind, "sanjeevi-padding", shapes=("spherocylinder",), aspect_ratio=4.0,
              validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",

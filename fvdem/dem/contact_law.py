@@ -1,5 +1,5 @@
 """Contact force law: linear spring-dashpot normal force, tangential spring with history and
-Coulomb limit, constant-directional-torque rolling friction (seed 000, Eqs. 3-5, Table 5).
+Coulomb limit, constant-directional-torque rolling friction (Mema et al., 2020, Eqs. 3-5, Table 5).
 
 Each sub-model is a small pure function; ``contact_force`` evaluates them in one visible order:
 
@@ -23,7 +23,7 @@ Each sub-model is a small pure function; ``contact_force`` evaluates them in one
                 ``-(F_t + eta_t v_t) / k_t`` (Eqs. 4-5)
 4. rolling:     constant directional torque ``T_r = -mu_r R* |F_n| w_roll / |w_roll|``, ``w_roll`` the
                 relative angular velocity projected on the tangent plane, ``R*`` the reduced radius.
-                Seed 000 lists ``mu_r = 0.46`` without a model; this is the standard CDT model
+                Mema et al. (2020) lists ``mu_r = 0.46`` without a model; this is the standard CDT model
                 (Ai et al. 2011, model A). The torque is capped so that it cannot reverse the
                 relative rolling within one step (``|T_r| <= I* |w_roll| / dt``): no chattering.
 

@@ -1,11 +1,11 @@
 """Dense random packings in a fully periodic box by compression.
 
 Random sequential insertion jams near a solids fraction of 0.35 (spheres) and lower for elongated
-particles; the suspensions of seed 004 reach 0.48. ``compress_periodic`` inserts the particles at a
+particles; the suspensions of Derksen reach 0.48. ``compress_periodic`` inserts the particles at a
 fraction insertion can reach into a proportionally larger periodic box, then shrinks the box in small
 affine steps (every position scaled with the box, as LAMMPS' ``fix deform ... remap x``), letting
 frictionless, damped contacts push apart the small overlaps each step creates, until the box has its
-target size. Without gravity or friction the orientations stay random (isotropic), which the seed's
+target size. Without gravity or friction the orientations stay random (isotropic), which Derksen's
 initial state also is.
 """
 from __future__ import annotations

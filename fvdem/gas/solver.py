@@ -1,4 +1,4 @@
-"""Volume-averaged gas flow ("model A", MODEL.md §2) with a collocated SIMPLE pressure-velocity coupling.
+"""Volume-averaged gas flow ("model A", docs/equations.md §2) with a collocated SIMPLE pressure-velocity coupling.
 
 Equations (gas density rho constant, interstitial velocity u, voidage eps):
 

@@ -1,8 +1,8 @@
 """Scenes: the kinds of run and what each measures (``base``), registered by name.
 
 =====================  ==================================================================
-``periodic_suspension``  moving particles in a fully periodic coupled box (seed 004)
-``fluidized_bed``        moving particles coupled to gas in a walled column (seed 000)
+``periodic_suspension``  moving particles in a fully periodic coupled box (Derksen)
+``fluidized_bed``        moving particles coupled to gas in a walled column (Mema et al., 2020)
 ``fixed_bed``            gas through fixed particles or a porous zone
 ``settling``             particles without gas exchange
 =====================  ==================================================================

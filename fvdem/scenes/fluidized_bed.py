@@ -1,4 +1,4 @@
-"""The fluidized bed scene (seed 000): particles carried by gas blown through a walled column's inlet.
+"""The fluidized bed scene (Mema et al., 2020): particles carried by gas blown through a walled column's inlet.
 
 Measured: the particles' state, the gas, the mixing of the two colours (when the particles carry
 them: ``particles.colour = 'by_height'``), the exchange and the bed pressure drop over W/A.
@@ -17,6 +17,6 @@ def is_fluidized_bed(case) -> bool:
 
 @register_scene("fluidized_bed", is_fluidized_bed)
 def fluidized_bed(case) -> Scene:
-    """Particles fluidized by gas through a walled column's inlet (seed 000)."""
+    """Particles fluidized by gas through a walled column's inlet (Mema et al., 2020)."""
     mixing = (Mixing(case),) if case.particles.colour == "by_height" else ()
     return Scene("fluidized_bed", (Particles(), Gas()) + mixing + (Coupling(), BedPressure()))

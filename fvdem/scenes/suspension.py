@@ -1,24 +1,24 @@
-"""The periodic suspension scene (seed 004): its dimensionless set-up and what it measures.
+"""The periodic suspension scene (Derksen): its dimensionless set-up and what it measures.
 
-**Set-up.** ``[suspension]`` is seed 004's periodic liquid fluidization (``../shared/MODEL.md`` §6): aspect ratio
+**Set-up.** ``[suspension]`` is Derksen's periodic liquid fluidization (``../shared/docs/equations.md`` §6): aspect ratio
 ``l/d``, density ratio ``gamma``, Galileo number ``Ga = g d^3 / nu^2`` (or ``Ga_e`` on the
 volume-equivalent diameter ``d_e = (3 l d^2 / 2)^(1/3)``), mean solids fraction ``<phi>``, box in
 diameters and cells per box. ``expand_suspension`` writes the dimensional set-up into the case table:
 
-- particles: ``n = round(<phi> V_box / V_p)``; seed 004's flat-ended cylinder (diameter d, length l)
+- particles: ``n = round(<phi> V_box / V_p)``; Derksen's flat-ended cylinder (diameter d, length l)
   becomes the spherocylinder of the same diameter and volume, length ``l + d/3`` (the cylinder part
-  ``l - 2d/3`` plus two hemispherical caps), so ``d_e``, mass and ``<phi>`` are the seed's; spheres
+  ``l - 2d/3`` plus two hemispherical caps), so ``d_e``, mass and ``<phi>`` are Derksen's; spheres
   have diameter d. Placed by compression (``particles.insertion.method = 'compress'``).
 - liquid: density ``rho``, ``nu = sqrt(g d^3 / Ga)`` (or ``sqrt(g d_e^3 / Ga_e)``), ``mu = rho nu``;
   particles ``rho_p = gamma rho``.
 - force balance: ``gas.mean_pressure_gradient = -rho_mix g`` with ``rho_mix = phi rho_p + (1 - phi) rho``
   (the actual ``phi`` of n particles). fvdem applies it as ``eps G`` to the liquid and ``V_p G`` to
-  each particle: the total force on the box is zero, the seed's body force ``(rho_p - rho) <phi> g``
+  each particle: the total force on the box is zero, Derksen's body force ``(rho_p - rho) <phi> g``
   on the liquid in another split (``G - rho g`` on the liquid per volume equals it when phi = <phi>).
 - box periodic in x, y, z; no walls; gas grid ``cells``.
 - rotational drag on (``coupling.rotational_drag = 'stokes'``): in a liquid it damps the tumbling
   that contacts start; without it a rod spins freely and its orientation samples its rotation plane
-  uniformly instead of the seed's distribution.
+  uniformly instead of Derksen's distribution.
 - momentum exactly exchanged: trilinear voidage (the transpose of the interpolation, so the
   pressure-gradient forces on liquid and particles sum to zero over the periodic box) and SIMPLE
   iterated to convergence each step (PISO's velocity is not the momentum equation's solution with the
@@ -163,7 +163,7 @@ def _show(value) -> str:
 
 # --------------------------------------------------------------------------- what it measures
 class Suspension(Observable):
-    """Slip Reynolds number ``(1 - phi) (u_f - u_p) d_e / nu`` (seed 004's ``(<u_z> - <u_pz>) d_e / nu``,
+    """Slip Reynolds number ``(1 - phi) (u_f - u_p) d_e / nu`` (Derksen's ``(<u_z> - <u_pz>) d_e / nu``,
     see ``fvdem.analysis.suspension``), the settling velocity [m/s], the particle velocity fluctuations
     [m/s] and the z momentum of particles plus liquid [kg m/s] (zero in a force-balanced box); every
     tenth sample the orientation-angle density (spherocylinders). Summary: ``suspension_summary``."""
@@ -248,6 +248,6 @@ def is_periodic_suspension(case) -> bool:
 
 @register_scene("periodic_suspension", is_periodic_suspension)
 def periodic_suspension(case) -> Scene:
-    """Particles settling through a liquid in a fully periodic, force-balanced box (seed 004)."""
+    """Particles settling through a liquid in a fully periodic, force-balanced box (Derksen)."""
     observables = (Particles(), Gas()) + ((Mixing(case),) if case.particles.colour == "by_height" else ())
     return Scene("periodic_suspension", observables + (Suspension(), Coupling()))
