@@ -109,9 +109,20 @@ def load_study(path, out) -> Study:
         raise CaseError([f"{path}: cannot be read ({exc})"]) from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError([f"{path}: not valid TOML ({exc})"]) from None
+    return study_from_table(table, path, out)
+
+
+def study_from_table(table: dict, path, out) -> Study:
+    """A study from its parsed file (``path``: where it is, for relative case paths and its name);
+    ``CaseError`` with every problem."""
+    path = Path(path)
     problems: list[str] = []
     for key in sorted(set(table) - STUDY_KEYS):
-        _problem(problems, key, table[key], f"unknown key; a study has {', '.join(sorted(STUDY_KEYS))}")
+        _problem(problems, key, table[key], f"unknown key{_did_you_mean(key, STUDY_KEYS)}; a study has "
+                 f"{', '.join(sorted(STUDY_KEYS))}")
+    for key in ("name", "description"):
+        if key in table and not isinstance(table[key], str):
+            _problem(problems, key, table[key], "a string")
     name = table.get("name", path.stem)
     duration = table.get("duration")
     if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not 0 < duration < 1e6:
@@ -125,6 +136,7 @@ def load_study(path, out) -> Study:
     for key, values in axes.items():
         if not isinstance(values, list) or not values:
             _problem(problems, f"axes.{key}", values, "a non-empty list of values")
+    axes = {k: v for k, v in axes.items() if isinstance(v, list) and v}  # the others are reported
     families = _table(table, "families", problems)
     if not families:
         problems.append("families: a study needs at least one family ([families.NAME] with case = ...)")
@@ -136,10 +148,14 @@ def load_study(path, out) -> Study:
         if not isinstance(spec, dict) or "case" not in spec:
             _problem(problems, f"{kind}.{key}", spec, "a table with case = 'path of a case file'")
             return None, {}
+        if not isinstance(spec["case"], str) or not spec["case"].strip():
+            _problem(problems, f"{kind}.{key}.case", spec["case"], "the path of a case file (a string)")
+            return None, {}
         unknown = set(spec) - {"case", "set"} - ({"bed", "duration", "replicas"} if kind == "families" else set())
+        allowed = {"case", "set"} | ({"bed", "duration", "replicas"} if kind == "families" else set())
         for k in sorted(unknown):
-            _problem(problems, f"{kind}.{key}.{k}", spec[k], "unknown key; allowed: case, set" +
-                     (", bed, duration, replicas" if kind == "families" else ""))
+            _problem(problems, f"{kind}.{key}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
+                     + ", ".join(sorted(allowed)))
         case_path = (base / spec["case"]).resolve()
         if not case_path.is_file():
             _problem(problems, f"{kind}.{key}.case", spec["case"], f"no such case file ({case_path})")
@@ -189,6 +205,9 @@ def load_study(path, out) -> Study:
         if not case_path:
             continue
         bed = spec.get("bed")
+        if bed is not None and not isinstance(bed, str):
+            _problem(problems, f"families.{family}.bed", bed, "the name of one of the study's beds (a string)")
+            bed = None
         family_duration = spec.get("duration", duration)
         if "duration" in spec and (not isinstance(family_duration, (int, float)) or isinstance(family_duration, bool)
                                    or not 0 < family_duration < 1e6):
@@ -215,20 +234,111 @@ def load_study(path, out) -> Study:
                 runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name),
                                     replica_bed(bed, replica) if bed is not None else None, point, run_duration,
                                     replica))
+    _check_names(runs, beds, problems)
     cluster = _table(table, "cluster", problems)
-    kind = cluster.get("kind", "local")
-    if kind not in CLUSTER_KINDS:
-        _problem(problems, "cluster.kind", kind, f"one of {', '.join(CLUSTER_KINDS)}")
+    check_cluster(cluster, problems)
     # every case is checked before anything runs (a bed's final state does not exist yet: not loaded)
     for spec in list(beds) + runs:
         overrides = dict(spec.overrides)
         try:
             load_case(spec.case, overrides)
         except CaseError as exc:
-            problems += [f"{spec.name}: {p}" for p in exc.problems]
+            label = spec.name if SAFE_NAME.match(spec.name) else f"[{spec.name!r}]"  # refused above as well
+            problems += [f"{label}: {p}" for p in exc.problems]
     if problems:
         raise CaseError(problems)
     return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster)
+
+
+def _did_you_mean(key, allowed) -> str:
+    import difflib
+    close = difflib.get_close_matches(str(key), sorted(allowed), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+# what a [cluster] table's keys must be, where fvdem knows (dask-jobqueue checks the rest of its own)
+CLUSTER_TYPES = {"workers": (int, "an integer >= 1 (jobs, or local worker processes)", lambda v: v >= 1),
+                 "cores": (int, "an integer >= 1 (task slots of a job's worker)", lambda v: v >= 1),
+                 "processes": (int, "an integer >= 1", lambda v: v >= 1),
+                 "job_cpu": (int, "an integer >= 1 (CPUs a job books)", lambda v: v >= 1),
+                 "memory": (str, "a memory size such as \"4GB\"",
+                            lambda v: re.fullmatch(r"\s*\d+(\.\d+)?\s*([kKmMgGtT]i?[bB]?|[bB])\s*", v) is not None),
+                 "walltime": (str, "a walltime such as \"24:00:00\" or \"1-00:00:00\"",
+                              lambda v: re.fullmatch(r"(\d+-)?\d+(:\d{2}){0,2}", v.strip()) is not None),
+                 "queue": (str, "a queue or partition name", lambda v: bool(v.strip())),
+                 "account": (str, "an account name", lambda v: bool(v.strip())),
+                 "job_extra_directives": (list, "a list of strings", lambda v: all(isinstance(x, str) for x in v)),
+                 "log_directory": (str, "a folder", lambda v: bool(v.strip()))}
+
+
+def cluster_keys(kind: str) -> set:
+    """The keys a ``[cluster]`` table of this kind takes: ``kind`` and ``workers``, and for a dask-jobqueue
+    kind the options of its cluster and job classes."""
+    if kind == "local":
+        return {"kind", "workers"}
+    try:
+        import inspect
+
+        import dask_jobqueue
+    except ImportError:  # pragma: no cover - a dependency
+        return set(CLUSTER_TYPES) | {"kind"}
+    cls = getattr(dask_jobqueue, {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster",
+                                  "lsf": "LSFCluster"}[kind])
+    names = {"kind", "workers"}
+    for k in (cls, *cls.__mro__, *cls.job_cls.__mro__):
+        if k is not object and "__init__" in k.__dict__:
+            names |= {n for n, prm in inspect.signature(k.__init__).parameters.items()
+                      if n != "self" and prm.kind not in (prm.VAR_KEYWORD, prm.VAR_POSITIONAL)}
+    return names - {"loop", "asynchronous", "scheduler_cls", "job_cls", "n_workers", "config_name"}
+
+
+def check_cluster(cluster: dict, problems) -> None:
+    """A study's ``[cluster]``: its kind, every key known for that kind (did-you-mean), the types fvdem
+    knows, and ``memory`` for a batch scheduler."""
+    kind = cluster.get("kind", "local")
+    if not isinstance(kind, str) or kind not in CLUSTER_KINDS:
+        _problem(problems, "cluster.kind", kind, f"one of {', '.join(CLUSTER_KINDS)}")
+        return
+    allowed = cluster_keys(kind)
+    for key in sorted(set(cluster) - allowed, key=str):
+        _problem(problems, f"cluster.{key}", cluster[key], f"unknown key for kind = {kind!r}"
+                 f"{_did_you_mean(key, allowed)}; allowed: {', '.join(sorted(allowed))}")
+    for key, (kind_of, what, ok) in CLUSTER_TYPES.items():
+        if key in cluster and key in allowed:
+            value = cluster[key]
+            if not isinstance(value, kind_of) or isinstance(value, bool) or not ok(value):
+                _problem(problems, f"cluster.{key}", value, what)
+    if kind != "local" and "memory" not in cluster:
+        problems.append(f"cluster.memory: missing; a {kind} job needs the memory it books, e.g. memory = \"4GB\" "
+                        "(one run of the paper's bed needs about 1 GB: README, \"What a run costs\")")
+
+
+SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")  # a run's or bed's folder name
+
+
+def _check_names(runs, beds, problems) -> None:
+    """Every run and bed has its own folder with a plain name: two runs whose axis values print alike
+    (names show 6 significant digits: 2.0 and 2.0000001) or a name with brackets, spaces or slashes (a
+    list- or string-valued axis) are refused, with the family and axis values that make them."""
+    seen = {}
+    for spec in beds:
+        if not SAFE_NAME.match(spec.name):
+            problems.append(f"beds.{spec.name}: the bed's folder name {spec.name!r} is not plain; use letters, "
+                            "digits and . _ + - only")
+    for run in runs:
+        values = ", ".join(f"{k} = {v!r}" for k, v in run.point.items()) or "no axes"
+        if not SAFE_NAME.match(run.name):
+            problems.append(f"families.{run.family}: run {run.name!r} ({values}) is not a plain folder name; a "
+                            "list- or string-valued axis puts brackets, spaces or slashes into it; use numbers or "
+                            "plain words (letters, digits and . _ + -)")
+        elif run.name in seen:
+            other = seen[run.name]
+            others = ", ".join(f"{k} = {v!r}" for k, v in other.point.items())
+            problems.append(f"axes: runs of family {run.family} ({values}) and {other.family} ({others}) are both "
+                            f"named {run.name!r}: run names show values to 6 significant digits; make them differ "
+                            "there")
+        else:
+            seen[run.name] = run
 
 
 def _table(table, key, problems):
@@ -570,11 +680,13 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         pass
     started = time.perf_counter()
     client, description = make_client(study.cluster, scheduler, workers, threads)
+    tag = task_tag(study, out)
     try:
-        beds = {b.name: client.submit(prepare_bed, b, threads, key=f"bed-{b.name}", pure=False, priority=10**12)
-                for b in study.beds}
-        futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"run-{r.name}",
+        beds = {b.name: client.submit(prepare_bed, b, threads, key=f"{tag}bed-{b.name}", pure=False,
+                                      priority=10**12) for b in study.beds}
+        futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"{tag}run-{r.name}",
                                  pure=False, priority=_priority(r)) for r in study.runs]
+        run_of = {future.key: run for future, run in zip(futures, study.runs)}
         total = sum(r.duration for r in study.runs)
         results, done = [], 0.0
         write_index(out, study, description=description)
@@ -589,8 +701,8 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                 try:
                     result = future.result()
                 except Exception as exc:  # noqa: BLE001  (a bed failed or was stopped: its runs cannot start)
-                    name = future.key.removeprefix("run-") if isinstance(future.key, str) else str(future.key)
-                    run = next(r for r in study.runs if r.name == name)
+                    run = run_of[future.key]
+                    name = run.name
                     stopped = isinstance(exc, StudyStopped) or (out / STOP_FILE).exists()
                     result = {"name": name, "family": run.family, "status": "stopped" if stopped else "failed",
                               "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
@@ -615,6 +727,15 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         summary["stopped"] = True
     (out / "study.json").write_text(json.dumps(summary, indent=1) + "\n")
     return summary
+
+
+def task_tag(study: Study, out) -> str:
+    """The prefix of a study's Dask task keys: its name and a digest of its folder, so that two studies
+    (or one study in two folders) on one shared scheduler never share a task (Dask keeps the first task
+    of a key and hands its result to the second: another study's bed, settled at other settings)."""
+    import hashlib
+    digest = hashlib.sha1(str(Path(out).resolve()).encode()).hexdigest()[:10]
+    return f"{study.name}-{digest}-"
 
 
 def _pending(run: RunSpec) -> dict:

@@ -640,3 +640,66 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert rounded(json.loads((dest / "findings.json").read_text())) == rounded(findings)
     assert rounded(table) == rounded(again)
     assert (dest / "runs" / "ar1_u_over_umf2" / "run.log").exists() and (dest / "fig7_void_fraction_2.png").exists()
+
+
+def _study_table(**changes):
+    import tomllib
+    table = tomllib.loads(SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/'))
+    table.update(changes)
+    return table
+
+
+def test_runs_that_would_share_a_folder_or_have_an_unsafe_one_are_refused_with_their_axes(tmp_path):
+    from fvdem.study import study_from_table
+    with pytest.raises(CaseError) as err:
+        study_from_table(_study_table(axes={"gas.u_over_umf": [2.0, 2.0000001]}), SMOKE, tmp_path)
+    text = str(err.value)
+    assert "both named 'ar1_u_over_umf2'" in text and "gas.u_over_umf = 2.0000001" in text
+    with pytest.raises(CaseError) as err:
+        study_from_table(_study_table(axes={"gas.u_over_umf": [2.0], "domain.upper": [[0.06, 0.06, 0.6]]}),
+                         SMOKE, tmp_path)
+    assert "is not a plain folder name" in str(err.value) and "domain.upper = [0.06, 0.06, 0.6]" in str(err.value)
+    path = tmp_path / "dup.toml"
+    path.write_text(SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+                    .replace("[2.0, 2.9]", "[2.0, 2.0000001]"))
+    result = subprocess.run([sys.executable, "-m", "fvdem", "study", str(path), "--out", str(tmp_path / "o")],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "Traceback" not in result.stderr and not (tmp_path / "o").exists()
+
+
+def test_a_wrong_study_key_or_cluster_option_is_refused_with_a_did_you_mean(tmp_path):
+    from fvdem.study import study_from_table
+    with pytest.raises(CaseError) as err:
+        study_from_table(_study_table(replica=2, cluster={"kind": "slurm", "workers": "two", "memroy": "2GB"}),
+                         SMOKE, tmp_path)
+    text = str(err.value)
+    assert "replica = 2: unknown key (did you mean 'replicas'?)" in text
+    assert "cluster.memroy = '2GB': unknown key for kind = 'slurm' (did you mean 'memory'?)" in text
+    assert "cluster.workers = 'two': an integer >= 1" in text and "cluster.memory: missing" in text
+    for cluster, fragment in (({"kind": "local", "memory": "2GB"}, "cluster.memory = '2GB': unknown key for kind = 'local'"),
+                              ({"kind": "pbs", "memory": "lots"}, "cluster.memory = 'lots': a memory size"),
+                              ({"kind": "slurm", "memory": "2GB", "walltime": "soon"}, "cluster.walltime = 'soon'"),
+                              ({"kind": "kubernetes"}, "cluster.kind = 'kubernetes'")):
+        with pytest.raises(CaseError) as err:
+            study_from_table(_study_table(cluster=cluster), SMOKE, tmp_path)
+        assert fragment in str(err.value)
+    study_from_table(_study_table(cluster={"kind": "slurm", "memory": "2GB", "walltime": "1-00:00:00",
+                                           "workers": 2, "queue": "compute"}), SMOKE, tmp_path)
+
+
+def test_two_studies_on_one_scheduler_never_share_a_task(tmp_path):
+    """Dask keeps the first task of a key: the keys carry the study's name and a digest of its folder."""
+    from fvdem.study import task_tag
+    full = load_study(ROOT / "studies" / "mema2020.toml", tmp_path / "a")
+    subset = load_study(ROOT / "studies" / "mema2020_subset.toml", tmp_path / "b")
+    assert {b.name for b in full.beds} & {b.name for b in subset.beds}  # the same bed names: bed-ar1 twice
+    assert task_tag(full, tmp_path / "a") != task_tag(subset, tmp_path / "b")
+    assert task_tag(full, tmp_path / "a") != task_tag(full, tmp_path / "c")
+    assert task_tag(full, tmp_path / "a") == task_tag(full, tmp_path / "x" / ".." / "a")
+
+
+def test_mutated_study_files_are_refused_by_key_and_never_crash_the_loader():
+    """tools/fuzz_cases.py --studies: 300 mutations of the shipped study files (the recorded run: 100,000)."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    import fuzz_cases
+    assert fuzz_cases.main(["--studies", "--count", "300", "--seed", "7", "--json"]) == 0

@@ -124,17 +124,38 @@ def check_one(table: dict, source: str):
     return "valid", None
 
 
+def check_study(table: dict, source: str):
+    """``check_one`` for a study file: ``fvdem.study.study_from_table`` (every case of the study checked)."""
+    from fvdem.study import study_from_table
+    try:
+        study_from_table(table, source, "/nonexistent/fuzz-study-out")
+    except CaseError as exc:
+        if not exc.problems or not all(STUDY_KEY_PATTERN.match(p) for p in exc.problems):
+            return "unnamed", exc.problems
+        return "refused", None
+    except Exception as exc:  # noqa: BLE001 - anything else is the finding
+        return "crash", f"{type(exc).__name__}: {exc} @ {traceback.extract_tb(exc.__traceback__)[-1].name}"
+    return "valid", None
+
+
+# a study's problem names a study key first, or the run or bed whose case has the problem ("ar1_u_over_umf2:
+# particles.count = -5: ..."), or the study file itself
+STUDY_KEY_PATTERN = re.compile(r"^(?:[\w.+-]+: |/|cluster|" + KEY_PATTERN.pattern[1:] + ")")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=10000, help="mutated case files to try")
     parser.add_argument("--seed", type=int, default=0, help="random seed of the mutations")
     parser.add_argument("--quick", action="store_true", help="200 mutations (seconds)")
+    parser.add_argument("--studies", action="store_true", help="mutate the study files of studies/ instead")
     parser.add_argument("--json", action="store_true", help="the result as one JSON line")
     args = parser.parse_args(argv)
     if args.quick:
         args.count = 200
     rng = random.Random(args.seed)
-    cases = case_tables()
+    cases = case_tables(ROOT / "studies") if args.studies else case_tables()
+    check = check_study if args.studies else check_one
     counts = {"valid": 0, "refused": 0, "crash": 0, "unnamed": 0}
     findings = []
     start = time.perf_counter()
@@ -142,13 +163,14 @@ def main(argv=None) -> int:
     for i in range(args.count):
         path, table = cases[rng.randrange(len(cases))]
         mutated, done = mutate(table, rng)
-        outcome, detail = check_one(mutated, str(path))
+        outcome, detail = check(mutated, str(path))
         counts[outcome] += 1
         if outcome in ("crash", "unnamed") and len(findings) < 20:
             findings.append({"case": path.name, "mutations": done, "outcome": outcome, "detail": detail})
         if (i + 1) % step == 0:
             print(f"{i + 1}/{args.count} cases: {counts}", file=sys.stderr, flush=True)
-    result = {"count": args.count, "seed": args.seed, "cases": [p.name for p, _ in cases], **counts,
+    result = {"count": args.count, "seed": args.seed, "kind": "studies" if args.studies else "cases",
+              "cases": [p.name for p, _ in cases], **counts,
               "seconds": round(time.perf_counter() - start, 1), "findings": findings}
     print(json.dumps(result) if args.json else json.dumps(result, indent=2))
     return 0 if counts["crash"] == 0 and counts["unnamed"] == 0 else 1
