@@ -55,6 +55,12 @@ def provenance(threads: int | None = None) -> dict:
             "command": " ".join(Path(sys.argv[0]).name if i == 0 else a for i, a in enumerate(sys.argv)) or None}
 
 
+def peak_memory_mb() -> float:
+    """This process's peak resident memory so far [MB] (a study worker's: its largest run's)."""
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def describe(record: dict) -> str:
     """One line: ``fvdem 0.2.0 (commit abc123), 2026-12-02T20:00:00+00:00 on host, 2 thread(s); numba ...``."""
     commit = f" (commit {record['commit']})" if record.get("commit") else ""

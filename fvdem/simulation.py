@@ -7,9 +7,6 @@ Writers only read the state, so a run resumed from a checkpoint continues bit-fo
 """
 from __future__ import annotations
 
-import contextlib
-import resource
-import signal
 import time as _time
 from dataclasses import asdict
 from pathlib import Path
@@ -19,12 +16,14 @@ from .dem.system import SimulationError
 from .io.checkpoint import load_checkpoint
 from .io.run_folder import (CHECKPOINT, OutputError, RunState, Schedule, check_resumable, prepare_output,
                             write_checkpoint, write_final, write_snapshot)
+from .io.progress import advance_bar, progress_bar
 from .io.run_log import RunLog
 from .io.timeseries import TimeseriesWriter
 from .model import Model, build_dem, build_particles, load_initial_state, set_threads
 from .monitors import RunawayWatch
-from .provenance import describe, provenance
+from .provenance import describe, peak_memory_mb, provenance
 from .scenes import scene_for
+from .signals import stop_on_signals
 from .timing import Timings
 
 
@@ -50,21 +49,15 @@ class Simulation:
         self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
         if resume and self.out is not None:
             check_resumable(case, self.out)
-        self.log = RunLog(self.out) if self.out is not None else None  # run.log: provenance, progress, warnings
-        with self._warnings_logged():
+        self.log = RunLog(self.out)  # run.log: provenance, progress, warnings (nothing without a folder)
+        with self.log.warnings_captured():
             self._build(case, resume)
-
-    def _warnings_logged(self):
-        """While the block runs, warnings also go to run.log (a run without a folder: nothing)."""
-        return self.log.warnings_captured() if self.log is not None else contextlib.nullcontext()
 
     def _build(self, case: Case, resume: bool) -> None:
         """The scene, the model (from the checkpoint when resuming), the schedules and the writers."""
         made_by = describe(provenance(self.threads))
         arrays, meta = load_checkpoint(self.out / CHECKPOINT) if resume else (None, None)
-        if self.log is not None:
-            self.log.line(f"{'resumed at t = %.6g s' % meta['time'] if resume else 'started'}: {case.name}, "
-                          f"{made_by}")
+        self.log.start(case.name, made_by, meta["time"] if resume else None)
         self.scene = scene_for(case)
         self.run_state = (RunState(histories=self.scene.new_histories()) if meta is None
                           else RunState.from_checkpoint(meta["writers"], self.scene.new_histories()))
@@ -110,21 +103,16 @@ class Simulation:
         end_time = self.case.time.end if duration is None else self.time + duration
         end_step = int(round(end_time / self.time_step))
         start_step = self.step_count
-        bar = self._progress_bar(end_time)
+        bar = progress_bar(end_time, self.time, f"{self.case.name} (simulated s)") if self.progress else None
         wall0, cpu0 = self._segment = _time.perf_counter(), _time.process_time()
-        handlers = self._install_signal_handlers()
-        log = self.log
-        if log is not None:
-            log.start_progress(self.time, end_time)
+        self.log.start_progress(self.time, end_time)
         try:
-            with self._warnings_logged():
+            with stop_on_signals(self.request_stop, self.out is not None), self.log.warnings_captured():
                 self._advance_to(end_step, bar, wall0, start_step)
         except Exception as exc:
-            if log is not None:
-                log.line(f"error at t = {self.time:.6g} s: {type(exc).__name__}: {exc}")
+            self.log.line(f"error at t = {self.time:.6g} s: {type(exc).__name__}: {exc}")
             raise
         finally:
-            self._restore_signal_handlers(handlers)
             if bar is not None:
                 bar.close()
             self.run_state.wall_seconds += _time.perf_counter() - wall0
@@ -135,15 +123,8 @@ class Simulation:
         if self.out is not None:
             self._write_guarded(self._write_checkpoint)
             self._write_guarded(write_final, self.out, self.particles, summary)
-            self._log_end(summary)
+            self.log.end(summary, self._stop_requested, self.run_state.settled)
         return summary
-
-    def _log_end(self, summary: dict) -> None:
-        from .timing import format_table
-        how = ("stopped (checkpoint written; resume with --resume)" if self._stop_requested else
-               "settled" if self.run_state.settled else "reached its end")
-        self.log.line(f"{how} at t = {self.time:.6g} s after {summary['wall_seconds']:.0f} s wall in all")
-        self.log.line(format_table(summary["timings"], summary["threads"], summary["steps"], summary["simulated_time"]))
 
     def _advance_to(self, end_step: int, bar, wall0: float, start_step: int) -> None:
         """The loop: chunks of steps up to the next event, the events, the progress bar and log."""
@@ -161,12 +142,8 @@ class Simulation:
             self.model.timings.add("output", _time.perf_counter() - events_start)
             elapsed = _time.perf_counter() - wall0
             rate = (self.step_count - start_step) / elapsed if elapsed > 0 else None
-            if self.log is not None:
-                self.log.progress(self.time, rate)
-            if bar is not None:
-                bar.update(self.time - bar.n)
-                if rate:
-                    bar.set_postfix_str(f"{rate:.0f} steps/s", refresh=False)
+            self.log.progress(self.time, rate)
+            advance_bar(bar, self.time, rate)
 
     def summary(self, steps: int = 0, wall: float = 0.0) -> dict:
         """The run's summary: time, steps, cost, and what the scene's observables derive."""
@@ -174,9 +151,7 @@ class Simulation:
                    "settled": self.run_state.settled, "stopped_early": self._stop_requested, "threads": self.threads,
                    "wall_seconds": self.run_state.wall_seconds, "cpu_seconds": self.run_state.cpu_seconds,
                    "timings": self.model.timings.table(self.run_state.wall_seconds),
-                   "provenance": provenance(self.threads),
-                   # the process's peak resident memory so far (a study worker's: its largest run's)
-                   "peak_memory_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
+                   "provenance": provenance(self.threads), "peak_memory_mb": peak_memory_mb()}
         summary.update(self.scene.summary(self.model, self.diagnostics(), self.run_state.histories,
                                           {"steps": steps, "wall": wall}))
         return summary
@@ -229,25 +204,6 @@ class Simulation:
                 f"writing the output failed at t = {self.time:.6g} s{where}: {exc.strerror or exc}; the last "
                 f"complete checkpoint in {self.out} is intact: free space or fix the folder's permissions, then "
                 "continue with --resume") from None
-
-    def _progress_bar(self, end_time: float):
-        if not self.progress:
-            return None
-        from .io.progress import progress_bar
-        return progress_bar(end_time, self.time, f"{self.case.name} (simulated s)")
-
-    def _install_signal_handlers(self):
-        if self.out is None:
-            return None
-        try:
-            return {s: signal.signal(s, self.request_stop) for s in (signal.SIGINT, signal.SIGTERM)}
-        except ValueError:  # not in the main thread
-            return None
-
-    @staticmethod
-    def _restore_signal_handlers(handlers) -> None:
-        for sig, handler in (handlers or {}).items():
-            signal.signal(sig, handler)
 
 
 __all__ = ["Simulation", "SimulationError", "OutputError", "build_particles", "build_dem", "load_initial_state",

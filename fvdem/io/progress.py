@@ -66,3 +66,12 @@ def progress_bar(total: float, initial: float, desc: str, stream=None):
                     file=stream,
                     bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.4f}/{total:.4f} s [{elapsed}<{remaining}{postfix}]")
     return LineProgress(total, initial, desc, stream=stream)
+
+
+def advance_bar(bar, time: float, rate: float | None) -> None:
+    """Move a bar (tqdm or ``LineProgress``; None: nothing) to ``time``, showing the steps per second."""
+    if bar is None:
+        return
+    bar.update(time - bar.n)
+    if rate:
+        bar.set_postfix_str(f"{rate:.0f} steps/s", refresh=False)

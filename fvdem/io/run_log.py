@@ -20,15 +20,29 @@ def warning_line(message, category) -> str:
 
 
 class RunLog:
-    """Appends timestamped lines to ``folder/run.log``; ``None``-safe helpers so a run without a folder
-    logs nothing."""
+    """Appends timestamped lines to ``folder/run.log``; with ``folder`` None (a run without an output
+    folder) every method does nothing."""
 
     def __init__(self, folder, step_percent: float = 5.0):
-        self.path = Path(folder) / LOG
+        self.path = Path(folder) / LOG if folder is not None else None
         self.step = step_percent
         self._next = None
 
+    def start(self, case_name: str, made_by: str, resumed_at: float | None) -> None:
+        self.line(f"{'started' if resumed_at is None else 'resumed at t = %.6g s' % resumed_at}: {case_name}, "
+                  f"{made_by}")
+
+    def end(self, summary: dict, stopped: bool, settled: bool) -> None:
+        """How the run ended and its timing table."""
+        from ..timing import format_table
+        how = ("stopped (checkpoint written; resume with --resume)" if stopped else
+               "settled" if settled else "reached its end")
+        self.line(f"{how} at t = {summary['simulated_time']:.6g} s after {summary['wall_seconds']:.0f} s wall in all")
+        self.line(format_table(summary["timings"], summary["threads"], summary["steps"], summary["simulated_time"]))
+
     def line(self, text: str) -> None:
+        if self.path is None:
+            return
         stamp = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
         with open(self.path, "a", encoding="utf-8") as fh:
             for part in str(text).splitlines() or [""]:
@@ -44,7 +58,7 @@ class RunLog:
 
     def progress(self, time: float, steps_per_second: float | None = None) -> None:
         """A line when simulated time crosses the next ``step_percent`` of the run's end."""
-        if self._next is None or self._end <= 0 or 100.0 * time / self._end + 1e-9 < self._next:
+        if self.path is None or self._next is None or self._end <= 0 or 100.0 * time / self._end + 1e-9 < self._next:
             return
         elapsed = _time.perf_counter() - self._wall0
         done = time - self._time0
@@ -57,6 +71,9 @@ class RunLog:
     @contextlib.contextmanager
     def warnings_captured(self):
         """While the block runs, every warning shown is also written here as one line."""
+        if self.path is None:
+            yield self
+            return
         shown = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
