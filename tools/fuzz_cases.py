@@ -110,32 +110,29 @@ def mutate(table: dict, rng: random.Random) -> tuple[dict, list[str]]:
     return table, done
 
 
-def check_one(table: dict, source: str):
-    """``("valid" | "refused" | "crash" | "unnamed", detail)``: "unnamed" is a CaseError whose
-    message names no key."""
+def _classify(load, pattern):
+    """``("valid" | "refused" | "crash" | "unnamed", detail)`` of ``load()``: "unnamed" is a CaseError with
+    a message that ``pattern`` (a key path first) does not match."""
     try:
-        case_from_dict(table, source=source)
+        load()
     except CaseError as exc:
-        if not exc.problems or not all(KEY_PATTERN.match(p) for p in exc.problems):
+        if not exc.problems or not all(pattern.match(p) for p in exc.problems):
             return "unnamed", exc.problems
         return "refused", None
     except Exception as exc:  # noqa: BLE001 - anything else is the finding
         return "crash", f"{type(exc).__name__}: {exc} @ {traceback.extract_tb(exc.__traceback__)[-1].name}"
     return "valid", None
+
+
+def check_one(table: dict, source: str):
+    """A mutated case file: ``case_from_dict``."""
+    return _classify(lambda: case_from_dict(table, source=source), KEY_PATTERN)
 
 
 def check_study(table: dict, source: str):
-    """``check_one`` for a study file: ``fvdem.study.study_from_table`` (every case of the study checked)."""
+    """A mutated study file: ``fvdem.study.study_from_table`` (every case of the study checked)."""
     from fvdem.study import study_from_table
-    try:
-        study_from_table(table, source, "/nonexistent/fuzz-study-out")
-    except CaseError as exc:
-        if not exc.problems or not all(STUDY_KEY_PATTERN.match(p) for p in exc.problems):
-            return "unnamed", exc.problems
-        return "refused", None
-    except Exception as exc:  # noqa: BLE001 - anything else is the finding
-        return "crash", f"{type(exc).__name__}: {exc} @ {traceback.extract_tb(exc.__traceback__)[-1].name}"
-    return "valid", None
+    return _classify(lambda: study_from_table(table, source, "/nonexistent/fuzz-study-out"), STUDY_KEY_PATTERN)
 
 
 # a study's problem names a study key first, or the run or bed whose case has the problem ("ar1_u_over_umf2:
