@@ -150,6 +150,11 @@ def cmd_study(args) -> int:
     if not args.out:
         return _fail("fvdem study STUDY.toml needs --out DIR (or: fvdem study DIR --report)")
     study = select_runs(load_study(target, args.out), args.only)
+    if args.cluster:  # the cluster apart from the physics: replaces the study file's [cluster]
+        from dataclasses import replace
+
+        from .study import load_cluster
+        study = replace(study, cluster=load_cluster(args.cluster))
     log = (lambda line: print(line, file=sys.stderr, flush=True))
     durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
     log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {durations} s into {args.out}")
@@ -313,6 +318,9 @@ def make_parser() -> argparse.ArgumentParser:
     study.add_argument("--threads-per-worker", type=positive_count, default=1,
                        help="numba threads of each run (default 1)")
     study.add_argument("--scheduler", help="address of a running Dask scheduler (instead of a LocalCluster)")
+    study.add_argument("--cluster", metavar="FILE",
+                       help="where the runs go, apart from the study file: a TOML file of [cluster] keys "
+                            "(kind = \"slurm\", memory, walltime, ...); replaces the study file's [cluster]")
     study.add_argument("--report", action="store_true",
                        help="only write the report of a study folder (or of an archive of one, --archive)")
     study.add_argument("--archive", metavar="DEST",

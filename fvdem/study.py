@@ -729,6 +729,25 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
     return summary
 
 
+def load_cluster(path) -> dict:
+    """A cluster file (``fvdem study ... --cluster FILE``): the ``[cluster]`` table of a study file on
+    its own, so the physics study file stays the same on a workstation and on any cluster. Its keys at
+    the top level, or under ``[cluster]``; checked like a study's (``check_cluster``)."""
+    path = Path(path)
+    try:
+        table = tomllib.loads(path.read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CaseError([f"--cluster {path}: cannot be read ({exc})"]) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError([f"--cluster {path}: not valid TOML ({exc})"]) from None
+    cluster = table["cluster"] if set(table) == {"cluster"} and isinstance(table["cluster"], dict) else table
+    problems: list[str] = []
+    check_cluster(cluster, problems)
+    if problems:
+        raise CaseError([f"{path}: {p}" for p in problems])
+    return cluster
+
+
 def task_tag(study: Study, out) -> str:
     """The prefix of a study's Dask task keys: its name and a digest of its folder, so that two studies
     (or one study in two folders) on one shared scheduler never share a task (Dask keeps the first task

@@ -703,3 +703,21 @@ def test_mutated_study_files_are_refused_by_key_and_never_crash_the_loader():
     sys.path.insert(0, str(ROOT / "tools"))
     import fuzz_cases
     assert fuzz_cases.main(["--studies", "--count", "300", "--seed", "7", "--json"]) == 0
+
+
+def test_a_cluster_file_apart_from_the_study_and_a_wrong_one_refused(tmp_path):
+    """--cluster FILE: the [cluster] keys on their own (the shipped SLURM and PBS examples are valid); a
+    misspelt key is refused with the file, the key and a did-you-mean, before anything runs (exit 2)."""
+    from fvdem.study import load_cluster
+    for name in ("slurm", "pbs"):
+        cluster = load_cluster(ROOT / "studies" / "clusters" / f"{name}.toml")
+        assert cluster["kind"] == name and cluster["memory"] == "2GB"
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[cluster]\nkind = "slurm"\nmemroy = "2GB"\n')
+    with pytest.raises(CaseError) as err:
+        load_cluster(bad)
+    assert "cluster.memroy" in str(err.value) and "did you mean 'memory'" in str(err.value) and str(bad) in str(err.value)
+    result = subprocess.run([sys.executable, "-m", "fvdem", "study", str(SMOKE), "--out", str(tmp_path / "o"),
+                             "--cluster", str(bad)], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "memroy" in result.stderr and "Traceback" not in result.stderr
+    assert not (tmp_path / "o").exists()
