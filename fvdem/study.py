@@ -680,6 +680,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         pass
     started = time.perf_counter()
     client, description = make_client(study.cluster, scheduler, workers, threads)
+    log(f"{description}; Dask dashboard at {getattr(client, 'dashboard_link', None) or 'none'}")
     tag = task_tag(study, out)
     try:
         beds = {b.name: client.submit(prepare_bed, b, threads, key=f"{tag}bed-{b.name}", pure=False,

@@ -86,6 +86,7 @@ def test_the_smoke_study_runs_on_a_local_cluster_and_a_second_call_starts_nothin
     # one progress view: simulated seconds over all runs, runs done, time left (a line per 2 % in a log)
     assert "study smoke (simulated s): 100% 0.0400/0.0400 s, 2/2 runs done" in first.stderr
     assert "Port 8787" not in first.stderr
+    assert "LocalCluster(2 workers x 1 numba threads); Dask dashboard at http://" in first.stderr  # printed at start
     # both runs started from the one settled bed
     for r in result["runs"]:
         assert (out / "beds" / "small" / "final_state.npz").as_posix() in (Path(r["folder"]) / "case.toml").read_text()
