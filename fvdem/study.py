@@ -100,16 +100,20 @@ def _problem(problems, key, value, allowed):
     problems.append(f"{key} = {value!r}: {allowed}")
 
 
+def read_toml(path, what: str = "") -> dict:
+    """A TOML file's table; ``CaseError`` naming the file (after ``what``, e.g. "--cluster ") when it
+    cannot be read or parsed."""
+    try:
+        return tomllib.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CaseError([f"{what}{path}: cannot be read ({exc})"]) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError([f"{what}{path}: not valid TOML ({exc})"]) from None
+
+
 def load_study(path, out) -> Study:
     """Read and check a study file; ``CaseError`` with every problem (key path, value, what is allowed)."""
-    path = Path(path)
-    try:
-        table = tomllib.loads(path.read_text())
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CaseError([f"{path}: cannot be read ({exc})"]) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise CaseError([f"{path}: not valid TOML ({exc})"]) from None
-    return study_from_table(table, path, out)
+    return study_from_table(read_toml(path), Path(path), out)
 
 
 def study_from_table(table: dict, path, out) -> Study:
@@ -735,12 +739,7 @@ def load_cluster(path) -> dict:
     its own, so the physics study file stays the same on a workstation and on any cluster. Its keys at
     the top level, or under ``[cluster]``; checked like a study's (``check_cluster``)."""
     path = Path(path)
-    try:
-        table = tomllib.loads(path.read_text())
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CaseError([f"--cluster {path}: cannot be read ({exc})"]) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise CaseError([f"--cluster {path}: not valid TOML ({exc})"]) from None
+    table = read_toml(path, "--cluster ")
     cluster = table["cluster"] if set(table) == {"cluster"} and isinstance(table["cluster"], dict) else table
     problems: list[str] = []
     check_cluster(cluster, problems)
