@@ -12,19 +12,25 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import MISSING, fields
+from dataclasses import fields
 
 from .case import UNITS, Case, _choices, case_as_dict
 
 SCHEMA_VERSION = "http://json-schema.org/draft-07/schema#"  # what Taplo (Even Better TOML) reads
 
 
-def _number(meta: dict) -> dict:
-    """A number with the field's bounds; with a unit also a ``"5.3 mm"`` string in one of its units."""
-    number: dict = {"type": "number"}
+def _bounded(kind: str, meta: dict) -> dict:
+    """``{"type": kind}`` with the field's bounds (gt, ge, lt, le) as JSON Schema keywords."""
+    out = {"type": kind}
     for key, word in (("gt", "exclusiveMinimum"), ("ge", "minimum"), ("lt", "exclusiveMaximum"), ("le", "maximum")):
         if meta.get(key) is not None:
-            number[word] = meta[key]
+            out[word] = meta[key]
+    return out
+
+
+def _number(meta: dict) -> dict:
+    """A number with the field's bounds; with a unit also a ``"5.3 mm"`` string in one of its units."""
+    number = _bounded("number", meta)
     if not meta.get("unit"):
         return number
     units = "|".join(re.escape(u) for u in UNITS[meta["unit"]])
@@ -38,12 +44,7 @@ def _value(meta: dict, live: bool) -> dict:
     if kind == "float":
         return _number(meta)
     if kind == "int":
-        out = {"type": "integer"}
-        for key, word in (("gt", "exclusiveMinimum"), ("ge", "minimum"), ("lt", "exclusiveMaximum"),
-                          ("le", "maximum")):
-            if meta.get(key) is not None:
-                out[word] = meta[key]
-        return out
+        return _bounded("integer", meta)
     if kind == "bool":
         return {"type": "boolean"}
     if kind == "str":

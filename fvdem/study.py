@@ -131,10 +131,7 @@ def study_from_table(table: dict, path, out) -> Study:
     duration = table.get("duration")
     if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not 0 < duration < 1e6:
         _problem(problems, "duration", duration, "a number of simulated seconds > 0")
-    replicas = table.get("replicas", 1)
-    if not isinstance(replicas, int) or isinstance(replicas, bool) or not 1 <= replicas <= 1000:
-        _problem(problems, "replicas", replicas, "an integer 1-1000")
-        replicas = 1
+    replicas = _replicas(table, "replicas", 1, problems)
     settings = _table(table, "settings", problems)
     axes = _table(table, "axes", problems)
     for key, values in axes.items():
@@ -155,9 +152,8 @@ def study_from_table(table: dict, path, out) -> Study:
         if not isinstance(spec["case"], str) or not spec["case"].strip():
             _problem(problems, f"{kind}.{key}.case", spec["case"], "the path of a case file (a string)")
             return None, {}
-        unknown = set(spec) - {"case", "set"} - ({"bed", "duration", "replicas"} if kind == "families" else set())
         allowed = {"case", "set"} | ({"bed", "duration", "replicas"} if kind == "families" else set())
-        for k in sorted(unknown):
+        for k in sorted(set(spec) - allowed):
             _problem(problems, f"{kind}.{key}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
                      + ", ".join(sorted(allowed)))
         case_path = (base / spec["case"]).resolve()
@@ -219,10 +215,7 @@ def study_from_table(table: dict, path, out) -> Study:
             family_duration = duration
         if bed is not None and bed not in bed_names:
             _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
-        family_replicas = spec.get("replicas", replicas)
-        if not isinstance(family_replicas, int) or isinstance(family_replicas, bool) or not 1 <= family_replicas <= 1000:
-            _problem(problems, f"families.{family}.replicas", family_replicas, "an integer 1-1000")
-            family_replicas = 1
+        family_replicas = _replicas(spec, f"families.{family}.replicas", replicas, problems)
         for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
             point = dict(zip(names, values))
             if any(all((family if k == "family" else point.get(k)) == v for k, v in e.items()) for e in exclusions):
@@ -252,6 +245,15 @@ def study_from_table(table: dict, path, out) -> Study:
     if problems:
         raise CaseError(problems)
     return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster)
+
+
+def _replicas(table: dict, path: str, default: int, problems) -> int:
+    """``table``'s ``replicas`` (``default`` when absent): an integer 1-1000, else a problem and 1."""
+    value = table.get("replicas", default)
+    if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= 1000:
+        _problem(problems, path, value, "an integer 1-1000")
+        return 1
+    return value
 
 
 def _did_you_mean(key, allowed) -> str:
@@ -392,14 +394,10 @@ def _simulated_so_far(folder: Path, live: bool = False) -> float:
 
 def _last_time(path: Path) -> float:
     """The time column of a time series' last complete line (read from the end of the file)."""
-    with open(path, "rb") as fh:
-        fh.seek(0, 2)
-        size = fh.tell()
-        fh.seek(max(0, size - 4096))
-        lines = [line for line in fh.read().split(b"\n") if line.strip()]
-    for line in reversed(lines):
+    from .io.run_log import tail_lines
+    for line in reversed(tail_lines(path, 4096)):
         try:
-            return float(line.split(b",", 1)[0])
+            return float(line.split(",", 1)[0])
         except ValueError:
             continue
     return 0.0
@@ -467,6 +465,10 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
     if scheduler:
         return Client(scheduler), scheduler
     cluster = cluster or {}
+    problems: list[str] = []
+    check_cluster(cluster, problems)  # a study's table was checked already; map_tasks' callers' is here
+    if problems:
+        raise CaseError(problems)
     options = {k: v for k, v in cluster.items() if k not in ("kind", "workers")}
     kind = cluster.get("kind", "local")
     count = workers or cluster.get("workers") or max(1, (os.cpu_count() or 1) // max(1, threads))
@@ -503,12 +505,9 @@ def jobqueue_options(kind: str, options: dict, threads: int) -> dict:
     """dask-jobqueue's options for a study's ``[cluster]`` table: one Dask worker process with one task
     slot per job (``cores = 1``, ``processes = 1``: one run at a time, its numba threads its own), and
     the job booking the run's ``threads`` CPUs where the scheduler has a separate option for it (SLURM
-    ``job_cpu``, LSF ``ncpus``; on PBS and SGE book them with ``resource_spec``). ``memory`` is
-    required; any other key is passed on and refused by dask-jobqueue if it does not know it."""
+    ``job_cpu``, LSF ``ncpus``; on PBS and SGE book them with ``resource_spec``). The table has been
+    checked (``check_cluster``: ``memory`` required, keys known to dask-jobqueue's classes)."""
     options = dict(options)
-    if "memory" not in options:
-        raise CaseError([f"cluster.memory: missing; a {kind} job needs the memory it books, e.g. memory = \"8GB\" "
-                         "(one run of the paper's bed needs about 1 GB)"])
     options.setdefault("cores", 1)
     options.setdefault("processes", 1)
     if kind == "slurm":
@@ -1000,7 +999,7 @@ def archive(out, dest) -> list:
         if (folder / "summary.json").exists():
             summary = json.loads((folder / "summary.json").read_text())
             summary = {k: summary[k] for k in ARCHIVED_SUMMARY if k in summary}
-            if series is not None and summary.get("stopped_early"):
+            if summary.get("stopped_early"):
                 summary.update(_so_far(series))
             (target / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
         for name in ("case.toml", "run.log"):

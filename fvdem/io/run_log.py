@@ -88,14 +88,19 @@ class RunLog:
             warnings.showwarning = shown
 
 
-def log_tail(folder, lines: int = 8) -> list[str]:
-    """The last ``lines`` lines of a run folder's log (empty without one)."""
-    path = Path(folder) / LOG
+def tail_lines(path, size: int = 16384) -> list[str]:
+    """The non-blank lines of a file's last ``size`` bytes (the first may be partial); empty when the
+    file cannot be read. For a log or a time series that a run appends to."""
     try:
         with open(path, "rb") as fh:
             fh.seek(0, 2)
-            fh.seek(max(0, fh.tell() - 16384))
+            fh.seek(max(0, fh.tell() - size))
             text = fh.read().decode("utf-8", "replace")
     except OSError:
         return []
-    return [line for line in text.splitlines() if line.strip()][-lines:]
+    return [line for line in text.splitlines() if line.strip()]
+
+
+def log_tail(folder, lines: int = 8) -> list[str]:
+    """The last ``lines`` lines of a run folder's log (empty without one)."""
+    return tail_lines(Path(folder) / LOG)[-lines:]
