@@ -113,3 +113,12 @@ def test_quaternion_axis_round_trip():
     q = quaternion_from_axis(axes)
     np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-14)
     np.testing.assert_allclose(axis_from_quaternion(q), axes, atol=1e-12)
+
+
+def test_the_branch_free_clamp_gives_the_branching_clamps_values():
+    from fvdem.dem.geometry import _clamp
+    rng = np.random.default_rng(2)
+    for x, lo, hi in [(0.5, -1.0, 1.0), (-2.0, -1.0, 1.0), (2.0, -1.0, 1.0), (1.0, -1.0, 1.0), (-1.0, -1.0, 1.0),
+                      (0.0, 0.0, 0.0), (-0.0, 0.0, 0.0), *zip(rng.normal(0, 2, 500), -np.abs(rng.normal(0, 1, 500)),
+                                                           np.abs(rng.normal(0, 1, 500)))]:
+        assert _clamp(x, lo, hi) == (lo if x < lo else (hi if x > hi else x))

@@ -83,3 +83,16 @@ def test_a_run_of_steps_is_bit_for_bit_the_same_steps_one_at_a_time(half_length)
         np.testing.assert_array_equal(value, one_by_one.particles.as_dict()[name], err_msg=name)
     np.testing.assert_array_equal(together.history, one_by_one.history)
     np.testing.assert_array_equal(together.wall_history, one_by_one.wall_history)
+
+
+def test_half_angle_terms_match_the_library_across_the_series_threshold():
+    """The rotation's series of cos x and sin x / x agree with the library's functions to a rounding
+    below the threshold and are the library above it (continuous across)."""
+    import math
+
+    from fvdem.dem.integrate import SMALL_ANGLE, half_angle_terms
+    xs = np.concatenate([[0.0, 1e-300, 1e-8, 1e-4], np.linspace(1e-3, 3 * SMALL_ANGLE, 2001), [0.5, 2.0, 3.1]])
+    for x in xs:
+        c, sinc = half_angle_terms(x * x)
+        assert c == pytest.approx(math.cos(x), rel=2.5e-16, abs=0.0)
+        assert sinc == pytest.approx(math.sin(x) / x if x else 1.0, rel=2.5e-16, abs=0.0)

@@ -6,6 +6,11 @@ A tool calls ``settled_beds`` before it measures anything: a missing bed is sett
 as ``fvdem study`` prepares its beds (with a progress bar and a line saying what it costs), and later
 runs reuse it. ``quick``: small beds of the same particles (1,500, fvdem's default spring and steps,
 seconds to settle) in ``bed_<name>_quick/``, for the tools' ``--quick`` modes and the test suite.
+
+``fluidized_states``: the same beds fluidized, the coupled cases (``cases/ar1.toml``, ``cases/ar4_mp.toml``)
+at 2.0 x fvdem's own Umf from a full-speed start at the defaults, run once for ``duration`` simulated seconds
+into ``fluidized_<name>[_quick]_<duration>s/checkpoint.npz`` (the DEM's and the gas's state, with the drag the
+particles last felt): what the fluidized-step benchmark (``bench_fluidized.py``) measures from.
 """
 from __future__ import annotations
 
@@ -21,6 +26,14 @@ QUICK = {"particles.count": 1500, "domain.upper": [0.15, 0.15, 0.2], "particles.
          "contact.normal_stiffness": 800.0, "time.dem_step": 5e-5, "time.min_time": 0.1, "time.end": 0.3,
          "output.timeseries_interval": 0.01, "run.threads": 1}
 QUICK_COUNT = QUICK["particles.count"]
+# the coupled case of each bed, and fvdem's own simulated Umf of the paper's closures for it [m/s]
+# (docs/validation.md, "Minimum fluidization velocity"): 2.0 x this fluidizes fvdem's bed as the paper's
+# 2.0 Umf fluidized the experiment's
+COUPLED = {"ar1": ROOT / "cases" / "ar1.toml", "ar4": ROOT / "cases" / "ar4_mp.toml"}
+OWN_UMF = {"ar1": 1.914, "ar4": 1.896}
+# fvdem's defaults (docs/speed-accuracy.md) and a full-speed start: the bed lifts within 0.5 s and bubbles
+FLUIDIZE = {"contact.normal_stiffness": 800.0, "time.dem_step": 5e-5, "gas.cfd_step": 5e-4, "gas.inlet_ramp": 0.0,
+            "gas.u_over_umf": 2.0, "output.vtk": False, "output.timeseries_interval": 0.01}
 
 
 def beds_dir() -> Path:
@@ -58,6 +71,32 @@ def settled_beds(names, tool: str, quick: bool = False) -> dict:
                   "later runs reuse it)", file=sys.stderr, flush=True)
             case = fvdem.load_case(CASES[name], dict(QUICK, **{"output.vtk": False}) if quick else None)
             resume = (state.parent / "checkpoint.npz").exists()  # a settling stopped earlier goes on
+            fvdem.Simulation(case, state.parent, resume=resume, overwrite=not resume, progress=not quick).run()
+        states[name] = state
+    return states
+
+
+def fluidized_path(name: str, duration: float, quick: bool = False) -> Path:
+    return beds_dir() / f"fluidized_{name}{'_quick' if quick else ''}_{duration:g}s" / "checkpoint.npz"
+
+
+def fluidized_states(names, tool: str, duration: float, quick: bool = False, threads: int = 1) -> dict:
+    """``{name: checkpoint.npz}`` of each bed fluidized for ``duration`` simulated seconds (``FLUIDIZE``),
+    run first where missing (the settled bed too); a fluidization stopped earlier goes on from its checkpoint.
+    The full beds cost about 5 (AR-1) and 10 (AR-4) minutes of wall time per simulated second on 2 cores."""
+    import fvdem
+    settled = settled_beds(names, tool, quick)
+    states = {}
+    for name in dict.fromkeys(names):
+        state = fluidized_path(name, duration, quick)
+        if not (state.parent / "summary.json").exists():
+            print(f"{tool}: fluidizing the {'quick' if quick else 'full'} bed {name} once for {duration:g} s into "
+                  f"{state.parent} (later runs reuse it)", file=sys.stderr, flush=True)
+            overrides = dict(FLUIDIZE, **{"particles.initial_state": str(settled[name]), "gas.umf": OWN_UMF[name],
+                                          "time.end": duration, "output.checkpoint_interval": min(0.5, duration),
+                                          "run.threads": threads, **({"particles.count": QUICK_COUNT} if quick else {})})
+            case = fvdem.load_case(COUPLED[name], overrides)
+            resume = state.exists()
             fvdem.Simulation(case, state.parent, resume=resume, overwrite=not resume, progress=not quick).run()
         states[name] = state
     return states

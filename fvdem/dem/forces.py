@@ -77,12 +77,12 @@ def _normal(dx, dy, dz, dist2, radius_sum):
 
 
 @njit(cache=True, inline="always")
-def _pair_constants(i, j, ri, rj, mass, inertia, params, law, uniform, spheres):
-    """``(eta_n, r_eff, inertia_eff)`` of pair (i, j): precomputed in ``uniform`` when all particles are
-    identical (``uniform[0] >= 0``), else from the pair's masses, radii and smaller principal inertias
+def _pair_constants(i, j, ri, rj, mass, inertia, params, law, same, uniform, spheres):
+    """``(eta_n, r_eff, inertia_eff)`` of pair (i, j): ``uniform`` (read once per row) when all particles
+    are identical (``same``), else from the pair's masses, radii and smaller principal inertias
     (``spheres``: the transverse one, which the kicks use; a sphere's two differ only at round-off)."""
-    if uniform[0] >= 0.0:
-        return uniform[0], uniform[1], uniform[2]
+    if same:
+        return uniform
     ii = inertia[i, 0] if spheres else min(inertia[i, 0], inertia[i, 1])
     ij = inertia[j, 0] if spheres else min(inertia[j, 0], inertia[j, 1])
     return (normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[0]), ri * rj / (ri + rj),
@@ -97,6 +97,7 @@ def _pair_row(i, position, velocity, angular_velocity, axis, radius, half_length
     ``uniform = (eta_n, r_eff, inertia_eff)`` when all particles are identical (pair constants
     precomputed), else ``uniform[0] < 0``."""
     same = uniform[0] >= 0.0
+    constants = (uniform[0], uniform[1], uniform[2])  # read once: the stores below might alias them
     lx, ly, lz = box_length[0], box_length[1], box_length[2]
     qx, qy, qz = periodic[0], periodic[1], periodic[2]
     max_overlap = 0.0  # identical particles: the largest overlap [m], divided by the diameter at the end
@@ -141,7 +142,7 @@ def _pair_row(i, position, velocity, angular_velocity, axis, radius, half_length
         vx = vix + ci[0] - velocity[j, 0] - cj[0]
         vy = viy + ci[1] - velocity[j, 1] - cj[1]
         vz = viz + ci[2] - velocity[j, 2] - cj[2]
-        eta_n, r_eff, inertia_eff = _pair_constants(i, j, ri, rj, mass, inertia, params, law, uniform, False)
+        eta_n, r_eff, inertia_eff = _pair_constants(i, j, ri, rj, mass, inertia, params, law, same, constants, False)
         fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
             history, slot, overlap, nx, ny, nz, vx, vy, vz,
             wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)
@@ -169,6 +170,7 @@ def _sphere_row(i, position, velocity, angular_velocity, radius, mass, inertia, 
     ``-l_i n`` and ``l_j n`` folded into the velocity and the torques. 15-25 % faster on the settled
     32,500-sphere bed (docs/benchmarks.md)."""
     same = uniform[0] >= 0.0
+    constants = (uniform[0], uniform[1], uniform[2])  # read once: the stores below might alias them
     lx, ly, lz = box_length[0], box_length[1], box_length[2]
     qx, qy, qz = periodic[0], periodic[1], periodic[2]
     max_overlap = 0.0  # identical particles: the largest overlap [m], divided by the diameter at the end
@@ -205,7 +207,7 @@ def _sphere_row(i, position, velocity, angular_velocity, radius, mass, inertia, 
         vx = vix - velocity[j, 0] - (sy * nz - sz * ny)
         vy = viy - velocity[j, 1] - (sz * nx - sx * nz)
         vz = viz - velocity[j, 2] - (sx * ny - sy * nx)
-        eta_n, r_eff, inertia_eff = _pair_constants(i, j, ri, rj, mass, inertia, params, law, uniform, True)
+        eta_n, r_eff, inertia_eff = _pair_constants(i, j, ri, rj, mass, inertia, params, law, same, constants, True)
         fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
             history, slot, overlap, nx, ny, nz, vx, vy, vz,
             wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)

@@ -25,10 +25,28 @@ import math
 from numba import njit, prange
 
 
+# below this half angle [rad] the rotations use the series of cos x and sin x / x to x^6: the first term
+# left out, x^8 / 8!, is under 7e-19 there, below a rounding of 1 (a drift's half angle is |w| dt / 2:
+# 2.5e-3 for 100 rad/s at the default 5e-5 s step, so the library's sin and cos are all but never called)
+SMALL_ANGLE = 0.02
+
+
 @njit(cache=True, inline="always")
-def _omega(lx, ly, lz, ax, ay, az, i_t, i_a):
-    la = (lx * ax + ly * ay + lz * az) * (1.0 / i_a - 1.0 / i_t)
-    return lx / i_t + la * ax, ly / i_t + la * ay, lz / i_t + la * az
+def half_angle_terms(x2):
+    """``(cos x, sin x / x)`` of a half angle x given as ``x2 = x^2`` [rad^2]: the Taylor series to x^6
+    below ``SMALL_ANGLE`` (round-off-exact there: no square root, sine or cosine), the library above."""
+    if x2 < SMALL_ANGLE * SMALL_ANGLE:
+        return (1.0 + x2 * (-1.0 / 2.0 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0))),
+                1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0))))
+    x = math.sqrt(x2)
+    return math.cos(x), math.sin(x) / x
+
+
+@njit(cache=True, inline="always")
+def _omega(lx, ly, lz, ax, ay, az, inv_t, inv_a):
+    """``w = L / I_t + (1/I_a - 1/I_t) (L . a) a`` from the inverse inertias."""
+    la = (lx * ax + ly * ay + lz * az) * (inv_a - inv_t)
+    return lx * inv_t + la * ax, ly * inv_t + la * ay, lz * inv_t + la * az
 
 
 @njit(cache=True, inline="always")
@@ -80,8 +98,7 @@ def kick_drift(position, velocity, angular_momentum, angular_velocity, quaternio
         position[i, 0] += velocity[i, 0] * dt
         position[i, 1] += velocity[i, 1] * dt
         position[i, 2] += velocity[i, 2] * dt
-        i_t = inertia[i, 0]
-        i_a = inertia[i, 1]
+        inv_t = 1.0 / inertia[i, 0]
         lx, ly, lz = angular_momentum[i, 0], angular_momentum[i, 1], angular_momentum[i, 2]
         dx = position[i, 0] - reference_position[i, 0]
         dy = position[i, 1] - reference_position[i, 1]
@@ -90,35 +107,36 @@ def kick_drift(position, velocity, angular_momentum, angular_velocity, quaternio
         if track_orientation and half_length[i] > 0.0:
             # exact free rotation with L held over the drift: precession about L by |L| dt / I_t
             # (world frame, left factor), spin about the body axis by (L.a)(1/I_a - 1/I_t) dt
-            # (body frame, right factor); L.a is invariant under the precession.
-            l_norm = math.sqrt(lx * lx + ly * ly + lz * lz)
-            spin = (lx * axis[i, 0] + ly * axis[i, 1] + lz * axis[i, 2]) * (1.0 / i_a - 1.0 / i_t) * dt
+            # (body frame, right factor); L.a is invariant under the precession. Half angles x enter
+            # as x^2 (``half_angle_terms``): the precession's quaternion is (cos x, L k sin x / x) with
+            # k = dt / (2 I_t), no |L| needed.
+            inv_a = 1.0 / inertia[i, 1]
+            k = half_dt * inv_t
+            c, sinc = half_angle_terms((lx * lx + ly * ly + lz * lz) * (k * k))
+            rw, rx, ry, rz = c, lx * k * sinc, ly * k * sinc, lz * k * sinc
             qw, qx, qy, qz = quaternion[i, 0], quaternion[i, 1], quaternion[i, 2], quaternion[i, 3]
-            if l_norm > 0.0:
-                half_angle = 0.5 * l_norm / i_t * dt
-                sh = math.sin(half_angle) / l_norm
-                rw, rx, ry, rz = math.cos(half_angle), lx * sh, ly * sh, lz * sh
-                qw, qx, qy, qz = (rw * qw - rx * qx - ry * qy - rz * qz, rw * qx + rx * qw + ry * qz - rz * qy,
-                                  rw * qy - rx * qz + ry * qw + rz * qx, rw * qz + rx * qy - ry * qx + rz * qw)
-            if spin != 0.0:
-                bw, bz = math.cos(0.5 * spin), math.sin(0.5 * spin)
-                qw, qx, qy, qz = qw * bw - qz * bz, qx * bw + qy * bz, qy * bw - qx * bz, qz * bw + qw * bz
+            qw, qx, qy, qz = (rw * qw - rx * qx - ry * qy - rz * qz, rw * qx + rx * qw + ry * qz - rz * qy,
+                              rw * qy - rx * qz + ry * qw + rz * qx, rw * qz + rx * qy - ry * qx + rz * qw)
+            half_spin = (lx * axis[i, 0] + ly * axis[i, 1] + lz * axis[i, 2]) * (inv_a - inv_t) * half_dt
+            bw, sinc = half_angle_terms(half_spin * half_spin)
+            bz = half_spin * sinc
+            qw, qx, qy, qz = qw * bw - qz * bz, qx * bw + qy * bz, qy * bw - qx * bz, qz * bw + qw * bz
             norm = 1.0 / math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
             qw, qx, qy, qz = qw * norm, qx * norm, qy * norm, qz * norm
             quaternion[i, 0], quaternion[i, 1], quaternion[i, 2], quaternion[i, 3] = qw, qx, qy, qz
             axis[i, 0] = 2.0 * (qx * qz + qw * qy)
             axis[i, 1] = 2.0 * (qy * qz - qw * qx)
             axis[i, 2] = 1.0 - 2.0 * (qx * qx + qy * qy)
-            w = _omega(lx, ly, lz, axis[i, 0], axis[i, 1], axis[i, 2], i_t, i_a)
+            w = _omega(lx, ly, lz, axis[i, 0], axis[i, 1], axis[i, 2], inv_t, inv_a)
             angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2] = w
             ex = axis[i, 0] - reference_axis[i, 0]
             ey = axis[i, 1] - reference_axis[i, 1]
             ez = axis[i, 2] - reference_axis[i, 2]
             moved += half_length[i] * math.sqrt(ex * ex + ey * ey + ez * ez)
         else:
-            angular_velocity[i, 0] = lx / i_t
-            angular_velocity[i, 1] = ly / i_t
-            angular_velocity[i, 2] = lz / i_t
+            angular_velocity[i, 0] = lx * inv_t
+            angular_velocity[i, 1] = ly * inv_t
+            angular_velocity[i, 2] = lz * inv_t
         displacement[i] = moved
 
 
@@ -133,10 +151,11 @@ def kick(velocity, angular_momentum, angular_velocity, axis, half_length, mass, 
         _kick(i, velocity, angular_momentum, mass, contact_force, contact_torque, external_force,
               external_torque, gravity, half_dt, drag_coefficient, fluid_velocity, drag_impulse, implicit_drag)
         lx, ly, lz = angular_momentum[i, 0], angular_momentum[i, 1], angular_momentum[i, 2]
+        inv_t = 1.0 / inertia[i, 0]
         if track_orientation and half_length[i] > 0.0:
-            w = _omega(lx, ly, lz, axis[i, 0], axis[i, 1], axis[i, 2], inertia[i, 0], inertia[i, 1])
+            w = _omega(lx, ly, lz, axis[i, 0], axis[i, 1], axis[i, 2], inv_t, 1.0 / inertia[i, 1])
             angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2] = w
         else:
-            angular_velocity[i, 0] = lx / inertia[i, 0]
-            angular_velocity[i, 1] = ly / inertia[i, 0]
-            angular_velocity[i, 2] = lz / inertia[i, 0]
+            angular_velocity[i, 0] = lx * inv_t
+            angular_velocity[i, 1] = ly * inv_t
+            angular_velocity[i, 2] = lz * inv_t
