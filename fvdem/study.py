@@ -84,6 +84,7 @@ class BedSpec:
     case: str
     overrides: dict
     folder: str
+    replica: int = 1  # the replica whose runs start from it (``_bed_priority``)
 
 
 @dataclass(frozen=True)
@@ -190,7 +191,7 @@ def study_from_table(table: dict, path, out) -> Study:
                 _problem(problems, f"beds.{name}", "...", f"a bed name that replica {replica} of bed {bed_name} "
                          "needs for its own settled bed; rename it")
             overrides = {**first.overrides, "particles.insertion.seed": seed + replica - 1}
-            beds.append(BedSpec(name, first.case, overrides, str(out / "beds" / name)))
+            beds.append(BedSpec(name, first.case, overrides, str(out / "beds" / name), replica))
             replica_beds[(bed_name, replica)] = name
         return replica_beds[(bed_name, replica)]
 
@@ -615,14 +616,30 @@ def request_stop(out) -> Path:
     return path
 
 
+# a replica's rank in the queue: every first replica before any second one, and so on (far more than a
+# run's DEM steps, 2e7 for 20 s at 1e-6 s); the beds come before the runs of their replica
+REPLICA_RANK = 10**10
+BED_RANK = 10**12
+
+
 def _priority(run: RunSpec) -> int:
-    """Longest first: DEM steps left (duration minus what the folder holds, over the DEM step)."""
+    """First replicas first, then longest first: DEM steps left (duration minus what the folder holds,
+    over the DEM step), less ``REPLICA_RANK`` per replica after the first. A campaign cut short has every
+    point of the study once before it has any twice."""
+    rank = -(run.replica - 1) * REPLICA_RANK
     try:
         dem_step = float(load_case(run.case, dict(run.overrides)).time.dem_step)
     except CaseError:
-        return 0
+        return rank
     left = max(0.0, run.duration - _simulated_so_far(Path(run.folder)))
-    return int(round(left / dem_step))
+    return rank + int(round(left / dem_step))
+
+
+def _bed_priority(bed: BedSpec) -> int:
+    """A bed settles before the runs of its replica (``_priority``) but after those of the replica before:
+    the first replicas' beds before everything, the own beds of second replicas once every first replica
+    has started."""
+    return BED_RANK if bed.replica == 1 else -(bed.replica - 1) * REPLICA_RANK + REPLICA_RANK // 2
 
 
 class _StudyProgress:
@@ -687,7 +704,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
     tag = task_tag(study, out)
     try:
         beds = {b.name: client.submit(prepare_bed, b, threads, key=f"{tag}bed-{b.name}", pure=False,
-                                      priority=10**12) for b in study.beds}
+                                      priority=_bed_priority(b)) for b in study.beds}
         futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"{tag}run-{r.name}",
                                  pure=False, priority=_priority(r)) for r in study.runs]
         run_of = {future.key: run for future, run in zip(futures, study.runs)}

@@ -1,13 +1,22 @@
 #!/usr/bin/env bash
-# The paper's study campaign (issue 30), resumable: start it in the background first thing in a session,
+# The paper's study campaign (issue 30), resumable: stage 1 (studies/mema2020_stage1.toml, why fvdem mixes
+# slowly at 2 Umf), then stage 2 (studies/mema2020_stage2.toml, the paper's 22 runs, two replicas). Start it
+# in the background first thing in a session, from a clone of its own (a work tree being edited would
+# change the code under a running campaign: the workers import it afresh whenever they restart):
+#   git clone <repo> ~/fvdem-code && cd ~/fvdem-code        # once; later: git -C ~/fvdem-code pull
 #   setsid nohup studies/campaign.sh > ~/fvdem-runs/campaign.log 2>&1 < /dev/null &
-# and before the session ends archive what finished into the repository:
+# and before the session ends archive what finished into the repository (from the work tree):
 #   .venv/bin/fvdem study ~/fvdem-runs/mema2020_stage1 --archive docs/data/mema2020_stage1
+#   .venv/bin/fvdem study ~/fvdem-runs/mema2020_stage2 --archive docs/data/mema2020
 # Study folders live outside the work tree (~/fvdem-runs), so a new work tree loses nothing; finished
-# runs are skipped, interrupted ones resume bit-for-bit from their checkpoints. Two runs at a time, one
-# numba thread each (more threads than free cores stall OpenMP: docs/benchmarks.md).
+# runs are skipped, interrupted ones resume bit-for-bit from their checkpoints (a run resumed by newer code
+# says so in its run.log). Two runs at a time, one numba thread each (more threads than free cores stall
+# OpenMP: docs/benchmarks.md). Stage 2 starts when stage 1 has ended, whether or not one of its runs failed.
 set -u
 cd "$(dirname "$0")/.."
 [ -x .venv/bin/fvdem ] || make venv
 OUT=${FVDEM_RUNS:-$HOME/fvdem-runs}
 .venv/bin/fvdem study studies/mema2020_stage1.toml --out "$OUT/mema2020_stage1" --workers 2
+status=$?
+[ $status -eq 130 ] && exit $status  # stopped (Ctrl-C, --stop, SIGTERM): not a reason to start stage 2
+.venv/bin/fvdem study studies/mema2020_stage2.toml --out "$OUT/mema2020_stage2" --workers 2

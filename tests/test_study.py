@@ -722,3 +722,20 @@ def test_a_cluster_file_apart_from_the_study_and_a_wrong_one_refused(tmp_path):
                              "--cluster", str(bad)], capture_output=True, text=True, timeout=120)
     assert result.returncode == 2 and "memroy" in result.stderr and "Traceback" not in result.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tmp_path):
+    """A campaign cut short has every point of the study once: the first replicas' runs outrank all second
+    replicas' (whatever their length), a second replica's own bed settles after the first replicas have
+    started and before the runs that need it."""
+    from fvdem.study import _bed_priority
+    study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
+    assert len(study.runs) == 44 and {r.replica for r in study.runs} == {1, 2}
+    first = [_priority(r) for r in study.runs if r.replica == 1]
+    second = [_priority(r) for r in study.runs if r.replica == 2]
+    assert min(first) > max(second)
+    assert max(first) == 8.0 / 5e-5  # then longest first within a replica
+    beds = {b.name: _bed_priority(b) for b in study.beds}
+    assert set(beds) == {"ar1", "ar4", "ar1_r2", "ar4_r2"}
+    assert min(beds["ar1"], beds["ar4"]) > max(first)
+    assert min(first) > beds["ar1_r2"] == beds["ar4_r2"] > max(second)
