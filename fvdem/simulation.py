@@ -41,9 +41,9 @@ class Simulation:
     def __init__(self, case: Case, out_dir=None, *, overwrite: bool = False, resume: bool = False,
                  progress: bool | None = None, threads: int | None = None, stop_file=None):
         self.case = case
-        # a file whose appearance stops the run like SIGTERM (checkpoint written): how a study stops
-        # runs inside Dask workers, where signals do not reach them
-        self._stop_file = Path(stop_file) if stop_file is not None else None
+        # a file whose appearance stops the run like SIGTERM (checkpoint written), or a callable saying when
+        # (once per chunk): how a study stops runs in Dask workers (no signals there) and before a walltime
+        self._stop_when = stop_file if callable(stop_file) else (Path(stop_file).exists if stop_file else None)
         self.threads = set_threads(case.run.threads if threads is None else threads)
         self.progress = case.output.progress if progress is None else progress
         self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
@@ -135,7 +135,7 @@ class Simulation:
             self.model.advance(target - step)
             # CPU time, not wall: a suspended run (SIGSTOP, sleep) or one sharing its cores is no runaway
             self.watch.cost(target - step, _time.process_time() - chunk_start)
-            if self._stop_file is not None and self._stop_file.exists():
+            if self._stop_when is not None and self._stop_when():
                 self._stop_requested = True
             events_start = _time.perf_counter()
             self._write_guarded(self._on_events, self.step_count)

@@ -275,7 +275,10 @@ CLUSTER_TYPES = {"workers": (int, "an integer >= 1 (jobs, or local worker proces
                  "queue": (str, "a queue or partition name", lambda v: bool(v.strip())),
                  "account": (str, "an account name", lambda v: bool(v.strip())),
                  "job_extra_directives": (list, "a list of strings", lambda v: all(isinstance(x, str) for x in v)),
-                 "log_directory": (str, "a folder", lambda v: bool(v.strip()))}
+                 "log_directory": (str, "a folder", lambda v: bool(v.strip())),
+                 "stop_before_walltime": (str, "a duration such as \"5m\", \"300s\" or \"00:05:00\" (fvdem's: a run "
+                                          "checkpoints and pauses this long before its job's walltime)",
+                                          lambda v: _duration_seconds(v) is not None)}
 
 
 def cluster_keys(kind: str) -> set:
@@ -291,7 +294,7 @@ def cluster_keys(kind: str) -> set:
         return set(CLUSTER_TYPES) | {"kind"}
     cls = getattr(dask_jobqueue, {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster",
                                   "lsf": "LSFCluster"}[kind])
-    names = {"kind", "workers"}
+    names = {"kind", "workers", "stop_before_walltime"}
     for k in (cls, *cls.__mro__, *cls.job_cls.__mro__):
         if k is not object and "__init__" in k.__dict__:
             names |= {n for n, prm in inspect.signature(k.__init__).parameters.items()
@@ -318,6 +321,53 @@ def check_cluster(cluster: dict, problems) -> None:
     if kind != "local" and "memory" not in cluster:
         problems.append(f"cluster.memory: missing; a {kind} job needs the memory it books, e.g. memory = \"4GB\" "
                         "(one run of the paper's bed needs about 1 GB: README, \"What a run costs\")")
+
+
+def walltime_seconds(text: str) -> int | None:
+    """Seconds of a batch walltime, SLURM's forms: ``minutes``, ``minutes:seconds``, ``hours:minutes:seconds``,
+    ``days-hours``, ``days-hours:minutes``, ``days-hours:minutes:seconds`` (PBS, SGE and LSF's ``HH:MM:SS``
+    among them); None if it is none of these."""
+    match = re.fullmatch(r"\s*(?:(\d+)-)?(\d+(?::\d{1,2}){0,2})\s*", str(text))
+    if match is None:
+        return None
+    days, parts = match[1], [int(x) for x in match[2].split(":")]
+    if days is None:  # minutes | minutes:seconds | hours:minutes:seconds
+        scale = {1: [60], 2: [60, 1], 3: [3600, 60, 1]}[len(parts)]
+    else:  # days-hours | days-hours:minutes | days-hours:minutes:seconds
+        scale = [3600, 60, 1][:len(parts)]
+    return int(days or 0) * 86400 + sum(a * b for a, b in zip(parts, scale))
+
+
+def _duration_seconds(text) -> float | None:
+    """Seconds of ``"5m"``, ``"300s"``, ``"1h"`` (Dask's forms) or ``"00:05:00"``; None if it is not one."""
+    if not isinstance(text, str):
+        return None
+    if ":" in text:
+        return walltime_seconds(text)
+    from dask.utils import parse_timedelta
+    try:
+        value = parse_timedelta(text.strip())
+    except (ValueError, KeyError, TypeError):
+        return None
+    return float(value) if value is not None and value >= 0 else None
+
+
+# a run inside a batch job pauses this long before the job's walltime unless the cluster table says
+# (stop_before_walltime): the current chunk, the checkpoint and the worker's shutdown must fit in it
+DEFAULT_STOP_BEFORE_WALLTIME = 300.0
+JOB_END_ENV, STOP_MARGIN_ENV = "FVDEM_JOB_END", "FVDEM_STOP_MARGIN"
+PAUSED_RETURN_DELAY = 10.0  # s: how long a job past its deadline holds a run it cannot start
+MAX_STALLS = 3  # paused attempts in a row that started and made no progress: the walltime is too short
+
+
+def job_deadline(environ=None) -> float | None:
+    """When a run in this process must have paused (epoch seconds): the job's end less the margin, both
+    exported by the job script's prologue (``jobqueue_options``); None outside such a job."""
+    environ = os.environ if environ is None else environ
+    try:
+        return float(environ[JOB_END_ENV]) - float(environ.get(STOP_MARGIN_ENV, DEFAULT_STOP_BEFORE_WALLTIME))
+    except (KeyError, ValueError):
+        return None
 
 
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")  # a run's or bed's folder name
@@ -404,23 +454,51 @@ def _last_time(path: Path) -> float:
     return 0.0
 
 
-def _simulate(case_path, overrides, folder, threads) -> dict:
+def _simulate(case_path, overrides, folder, threads, deadline: float | None = None) -> dict:
     """Run (or resume, or skip) one case into ``folder``; returns status and summary. A run stopped
-    through the study's stop file checkpoints and comes back ``stopped``."""
+    through the study's stop file checkpoints and comes back ``stopped``; one that would run past
+    ``deadline`` (epoch seconds: its batch job's walltime less a margin, ``job_deadline``) checkpoints
+    before it and comes back ``paused``, for the study to resubmit in another job."""
     from .simulation import Simulation
     folder = Path(folder)
     case = load_case(case_path, {**overrides, "output.progress": False})
     if _finished(folder, case.time.end):
         return {"status": "skipped", "summary": json.loads((folder / "summary.json").read_text())}
     stop_file = _study_stop_file(folder)
+    so_far = {"simulated_time": _simulated_so_far(folder), "stopped_early": True}
     if stop_file.exists():
-        return {"status": "stopped", "summary": {"simulated_time": _simulated_so_far(folder), "stopped_early": True}}
+        return {"status": "stopped", "summary": so_far}
+    if deadline is not None and time.time() >= deadline:
+        # a job on its way out took the run: give it back, not at once (the worker retires within half the
+        # margin; until then each resubmission would come straight back to it)
+        time.sleep(PAUSED_RETURN_DELAY)
+        return {"status": "paused", "started": False, "summary": so_far}
+    stop = _StopWhen(stop_file, deadline)
     resume = (folder / "checkpoint.npz").exists()
     summary = Simulation(case, folder, resume=resume, overwrite=not resume, threads=threads, progress=False,
-                         stop_file=stop_file).run()
+                         stop_file=stop).run()
     if summary.get("stopped_early"):
-        return {"status": "stopped", "summary": summary}
+        return {"status": "paused" if stop.deadline_reached else "stopped", "started": True, "summary": summary}
     return {"status": "resumed" if resume else "finished", "summary": summary}
+
+
+class _StopWhen:
+    """A run's stop condition, checked once per chunk: the study's stop file, or a chunk that would end past
+    ``deadline`` (the next chunk taken to last as long as the last one did, with half as much again)."""
+
+    def __init__(self, stop_file: Path, deadline: float | None):
+        self.stop_file, self.deadline = stop_file, deadline
+        self.deadline_reached = False
+        self._last = time.time()
+
+    def __call__(self) -> bool:
+        if self.stop_file.exists():
+            return True
+        now = time.time()
+        chunk, self._last = now - self._last, now
+        if self.deadline is not None and now + 1.5 * chunk >= self.deadline:
+            self.deadline_reached = True
+        return self.deadline_reached
 
 
 def prepare_bed(bed: BedSpec, threads: int) -> str:
@@ -442,17 +520,32 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
     if bed_state is not None:
         overrides["particles.initial_state"] = bed_state
     try:
-        outcome = _simulate(run.case, overrides, run.folder, threads)
+        outcome = _simulate(run.case, overrides, run.folder, threads, job_deadline())
     except Exception as exc:  # noqa: BLE001  (any failure of one run is reported, the others go on)
         from .io.run_log import log_tail
         return {"name": run.name, "family": run.family, "status": "failed", "error": f"{type(exc).__name__}: {exc}",
                 "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
                 "wall_seconds": time.perf_counter() - started, "log_tail": log_tail(run.folder)}
     summary = outcome["summary"]
+    if outcome["status"] == "paused":
+        _retire_this_worker()
     return {"name": run.name, "family": run.family, "status": outcome["status"], "t95": summary.get("t95"),
             "folder": run.folder, "simulated_seconds": summary["simulated_time"], "point": run.point,
             "pressure_drop_over_weight": summary.get("pressure_drop_over_weight"),
-            "wall_seconds": time.perf_counter() - started}
+            "wall_seconds": time.perf_counter() - started, **({"started": outcome["started"]}
+                                                               if "started" in outcome else {})}
+
+
+def _retire_this_worker() -> None:
+    """A run paused for its job's walltime: the job's worker takes no further run and leaves once this
+    task's result is out, so the job ends and the cluster's adaptive scaling starts a fresh one (no-op
+    outside a Dask worker)."""
+    try:
+        from distributed import get_worker
+        worker = get_worker()
+    except (ImportError, ValueError):
+        return
+    worker.loop.add_callback(worker.close_gracefully, reason="fvdem: a run paused before the job's walltime")
 
 
 # --------------------------------------------------------------------------- the scheduler side
@@ -498,8 +591,12 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
         jobs = getattr(dask_jobqueue, cluster_class)(**jobqueue_options(kind, options, threads))
     except (TypeError, ValueError) as exc:  # an option dask-jobqueue does not know
         raise CaseError([f"cluster: {exc} (the [cluster] table's keys are dask_jobqueue.{cluster_class}'s options)"]) from None
-    jobs.scale(jobs=count)
-    return Client(jobs), f"{cluster_class}({count} jobs)"
+    # jobs while runs wait, none once they are done: a job that ends (its walltime, its worker's lifetime)
+    # is replaced as long as runs are left, and idle ones are released to the shared queue. A target
+    # duration of 1 ms asks for one job per waiting run (up to ``count``): Dask's default (5 s, with an
+    # unknown task taken to last 0.5 s) would start one job for the first ten runs
+    jobs.adapt(minimum_jobs=0, maximum_jobs=count, target_duration="1ms")
+    return Client(jobs), f"{cluster_class}(up to {count} jobs)"
 
 
 def jobqueue_options(kind: str, options: dict, threads: int) -> dict:
@@ -509,12 +606,23 @@ def jobqueue_options(kind: str, options: dict, threads: int) -> dict:
     ``job_cpu``, LSF ``ncpus``; on PBS and SGE book them with ``resource_spec``). The table has been
     checked (``check_cluster``: ``memory`` required, keys known to dask-jobqueue's classes)."""
     options = dict(options)
+    margin = options.pop("stop_before_walltime", None)
     options.setdefault("cores", 1)
     options.setdefault("processes", 1)
     if kind == "slurm":
         options.setdefault("job_cpu", threads)
     elif kind == "lsf":
         options.setdefault("ncpus", threads)
+    walltime = walltime_seconds(options["walltime"]) if "walltime" in options else None
+    if walltime:
+        # the job exports when it ends and the margin; a run pauses that long before (``job_deadline``) and
+        # the worker retires halfway through the margin, so it takes no new run on its way out
+        margin = _duration_seconds(margin) if margin is not None else min(DEFAULT_STOP_BEFORE_WALLTIME, walltime / 4)
+        options["job_script_prologue"] = [*options.get("job_script_prologue", []),
+                                          f"export {JOB_END_ENV}=$(( $(date +%s) + {walltime} ))",
+                                          f"export {STOP_MARGIN_ENV}={margin:g}"]
+        options["worker_extra_args"] = [*options.get("worker_extra_args", []),
+                                        "--lifetime", f"{max(1.0, walltime - margin / 2):g}s"]
     return options
 
 
@@ -708,6 +816,27 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"{tag}run-{r.name}",
                                  pure=False, priority=_priority(r)) for r in study.runs]
         run_of = {future.key: run for future, run in zip(futures, study.runs)}
+        attempts = {r.name: 1 for r in study.runs}
+        stalls: dict[str, tuple] = {}  # run -> (paused attempts in a row without progress, time reached)
+
+        def resubmit(run, result):
+            """A run paused before its job's walltime goes back into the queue under a new key, however many
+            jobs it takes; None after ``MAX_STALLS`` started attempts in a row without progress (or when
+            the study is stopping)."""
+            count, reached = stalls.get(run.name, (0, -1.0))
+            if result.get("started", True):
+                count = count + 1 if result["simulated_seconds"] <= reached else 0
+            stalls[run.name] = (count, max(reached, result["simulated_seconds"]))
+            if count >= MAX_STALLS or (out / STOP_FILE).exists():
+                return None
+            attempts[run.name] += 1
+            bar.message(f"{run.name}: paused at t = {result['simulated_seconds']:.4g} s before its job's walltime; "
+                        f"resubmitted (attempt {attempts[run.name]})")
+            retry = client.submit(run_task, run, threads, beds.get(run.bed) if run.bed else None,
+                                  key=f"{tag}run-{run.name}-{attempts[run.name]}", pure=False, priority=_priority(run))
+            run_of[retry.key] = run
+            return retry
+
         total = sum(r.duration for r in study.runs)
         results, done = [], 0.0
         write_index(out, study, description=description)
@@ -728,6 +857,16 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                     result = {"name": name, "family": run.family, "status": "stopped" if stopped else "failed",
                               "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
                               **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
+                if result["status"] == "paused":
+                    retry = resubmit(run_of[future.key], result)
+                    if retry is not None:
+                        pending.add(retry)
+                        write_index(out, study, [*results, result], description)
+                        continue
+                    result = {**result, "status": "failed", "error": (
+                        f"paused {MAX_STALLS} times in a row at t = {result['simulated_seconds']:.6g} s without "
+                        "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
+                        "it; raise the cluster's walltime or lower stop_before_walltime")}
                 results.append(result)
                 done += result.get("simulated_seconds", 0.0) if result["status"] != "failed" else 0.0
                 detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None

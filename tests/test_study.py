@@ -497,16 +497,21 @@ def test_a_slurm_cluster_table_submits_one_job_per_worker_with_the_runs_threads_
     client, description = make_client({"kind": "slurm", "workers": 2, "memory": "4GB", "walltime": "02:00:00",
                                         "queue": "compute"}, None, None, threads=4)
     try:
+        time.sleep(3)  # adaptive: no job while nothing waits
+        assert description == "SLURMCluster(up to 2 jobs)" and not list(jobs.glob("job.*[0-9]"))
+        waiting = [client.submit(time.sleep, 1, pure=False) for _ in range(3)]  # noqa: F841 (they wait)
         deadline = time.time() + 60
         while len(list(jobs.glob("job.*[0-9]"))) < 2 and time.time() < deadline:
             time.sleep(0.2)
-        assert description == "SLURMCluster(2 jobs)"
         scripts = [path.read_text() for path in sorted(jobs.glob("job.*[0-9]"))]
-        assert len(scripts) == 2
+        assert len(scripts) == 2  # up to `workers` jobs, however many runs wait
         for script in scripts:
             assert "#SBATCH --cpus-per-task=4" in script and "#SBATCH -p compute" in script
             assert "#SBATCH -t 02:00:00" in script and "--nthreads 1" in script
             assert "distributed.cli.dask_worker" in script or "dask worker" in script or "dask-worker" in script
+            # the job exports its end and the margin; its worker retires halfway through the margin
+            assert "export FVDEM_JOB_END=$(( $(date +%s) + 7200 ))" in script and "export FVDEM_STOP_MARGIN=300" in script
+            assert "--lifetime 7050s" in script
     finally:
         close_client(client)
     with pytest.raises(CaseError) as err:
@@ -739,3 +744,51 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     assert set(beds) == {"ar1", "ar4", "ar1_r2", "ar4_r2"}
     assert min(beds["ar1"], beds["ar4"]) > max(first)
     assert min(first) > beds["ar1_r2"] == beds["ar4_r2"] > max(second)
+
+
+def test_walltimes_and_durations_in_the_forms_the_schedulers_take():
+    from fvdem.study import _duration_seconds, walltime_seconds
+    assert [walltime_seconds(t) for t in ("30", "30:15", "02:00:00", "1-00", "1-02:30", "1-02:30:05", " 01:00:00 ")] == [
+        1800, 1815, 7200, 86400, 86400 + 9000, 86400 + 9005, 3600]
+    assert walltime_seconds("2h") is None and walltime_seconds("") is None
+    assert [_duration_seconds(t) for t in ("5m", "300s", "1h", "00:05:00")] == [300, 300, 3600, 300]
+    assert _duration_seconds("soon") is None and _duration_seconds(5) is None
+
+
+def test_a_run_pauses_before_its_jobs_walltime_and_resumes_bit_for_bit(tmp_path, monkeypatch):
+    """Inside a batch job (its end and margin exported by the job script, ``job_deadline``) a run checkpoints
+    and comes back ``paused`` before the deadline; resumed in the next job it ends bit-for-bit where it ends
+    uninterrupted. A job already past its deadline hands a run back without a step."""
+    import time
+
+    import numpy as np
+
+    import fvdem.study as study_module
+    from fvdem.study import job_deadline, prepare_bed
+    assert job_deadline({}) is None
+    assert job_deadline({"FVDEM_JOB_END": "1000", "FVDEM_STOP_MARGIN": "60"}) == 940.0
+    assert job_deadline({"FVDEM_JOB_END": "1000"}) == 700.0  # 5 minutes unless the cluster table says
+    text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/').replace("duration = 0.02", "duration = 0.2")
+    path = tmp_path / "long.toml"
+    path.write_text(text.replace('"time.end" = 0.03', '"time.end" = 0.01'))
+    study = load_study(path, tmp_path / "out")
+    bed = prepare_bed(study.beds[0], 1)
+    whole, cut = study.runs[0], replace(study.runs[0], folder=str(tmp_path / "out" / "runs" / "cut"))
+    assert run_task(whole, 1, bed)["status"] == "finished"
+    monkeypatch.setattr(study_module, "PAUSED_RETURN_DELAY", 0.0)
+    monkeypatch.setenv("FVDEM_STOP_MARGIN", "0")
+    monkeypatch.setenv("FVDEM_JOB_END", str(time.time() - 1))  # a job at its end: not a step
+    result = run_task(cut, 1, bed)
+    assert result["status"] == "paused" and result["started"] is False and not Path(cut.folder).exists()
+    paused_at = []
+    for _ in range(100):  # jobs of 0.3 s each until the run is done (the whole run takes a few seconds)
+        monkeypatch.setenv("FVDEM_JOB_END", str(time.time() + 0.3))
+        result = run_task(cut, 1, bed)
+        if result["status"] != "paused":
+            break
+        assert result["started"] is True and (Path(cut.folder) / "checkpoint.npz").exists()
+        paused_at.append(result["simulated_seconds"])
+    assert result["status"] == "resumed" and len(paused_at) >= 2 and paused_at == sorted(paused_at)
+    with np.load(Path(whole.folder) / "final_state.npz") as a, np.load(Path(cut.folder) / "final_state.npz") as b:
+        for key in a.files:
+            np.testing.assert_array_equal(a[key], b[key], err_msg=key)
