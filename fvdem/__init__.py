@@ -21,9 +21,9 @@ import numba as _numba  # noqa: E402
 if not {"NUMBA_THREADING_LAYER", "NUMBA_THREADING_LAYER_PRIORITY"} & set(_os.environ):
     _numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
-from .case import Case, CaseError, load_case  # noqa: E402
-from .dem.system import SimulationError  # noqa: E402
-from .simulation import OutputError, Simulation  # noqa: E402
+from .case import Case, load_case  # noqa: E402
+from .errors import CaseError, OutputError, SimulationError  # noqa: E402
+from .simulation import Simulation  # noqa: E402
 
 
 def run(case_path, out_dir=None, overrides=None, **kwargs) -> dict:

@@ -22,6 +22,7 @@ from typing import Any
 from .coupling.closures import describe_laws, law, law_names
 from .coupling.voidage import describe_voidage, voidage_names
 from .dem.contact_law import collision_time
+from .errors import CaseError  # noqa: F401  (re-exported: fvdem.case.CaseError)
 from .dem.particles import spherocylinder_volume, volume_equivalent_diameter
 
 # --------------------------------------------------------------------------- units
@@ -33,14 +34,6 @@ UNITS = {
     "velocity": {"m/s": 1.0, "cm/s": 1e-2, "mm/s": 1e-3},
     "acceleration": {"m/s^2": 1.0, "m/s2": 1.0},
 }
-
-
-class CaseError(ValueError):
-    """Invalid case input. ``problems`` lists one message per offending key."""
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("\n".join(self.problems))
 
 
 def spec(default=MISSING, *, kind="float", unit=None, gt=None, ge=None, lt=None, le=None, choices=None,

@@ -368,8 +368,8 @@ def _quiet_after_broken_pipe() -> int:
 
 
 def main(argv=None) -> int:
-    from .io.run_folder import OutputError
-    from .dem.system import SimulationError
+    from .errors import OutputError
+    from .errors import SimulationError
     args = make_parser().parse_args(argv)
     warnings.showwarning = _show_warning
     try:

@@ -11,7 +11,7 @@ from collections import deque
 import numpy as np
 
 from .analysis.bed import particle_top
-from .dem.system import SimulationError
+from .errors import SimulationError
 
 # a chunk costing this many times the median step of the recent chunks is warned about (once)
 RUNAWAY_COST = 20.0

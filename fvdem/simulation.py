@@ -12,7 +12,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from .case import Case, to_toml
-from .dem.system import SimulationError
+from .errors import SimulationError
 from .io.checkpoint import load_checkpoint
 from .io.run_folder import (CHECKPOINT, OutputError, RunState, Schedule, check_resumable, prepare_output,
                             write_checkpoint, write_final, write_snapshot)

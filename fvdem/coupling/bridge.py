@@ -39,7 +39,7 @@ from time import perf_counter
 
 import numpy as np
 
-from ..dem.system import SimulationError
+from ..errors import SimulationError
 from . import closures
 from .interpolation import ParticleGridMap
 from .kernels import column_sums, exchange_terms, particle_forces, slip_at_particles

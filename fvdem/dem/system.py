@@ -20,6 +20,7 @@ from time import perf_counter
 import numba
 import numpy as np
 
+from ..errors import SimulationError  # noqa: F401  (re-exported: fvdem.dem.system.SimulationError)
 from ..timing import Timings
 
 from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
@@ -57,10 +58,6 @@ def adapted_skin(skin: float, interval: int, lower: float, upper: float) -> floa
     lifetime scales with its skin and the interval converges geometrically to the target."""
     factor = min(2.0, max(0.5, (SKIN_TARGET_INTERVAL / max(interval, 1)) ** 0.5))
     return min(upper, max(lower, skin * factor))
-
-
-class SimulationError(RuntimeError):
-    """A run cannot continue (non-finite values, particles lost, unstable settings)."""
 
 
 @dataclass(frozen=True)

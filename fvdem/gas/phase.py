@@ -7,7 +7,7 @@ from time import perf_counter
 import numpy as np
 
 from ..coupling.closures import ergun_beta_per_solids
-from ..dem.system import SimulationError
+from ..errors import SimulationError
 from .mesh import GasMesh
 from .solver import GasProperties, GasSolver
 
@@ -174,40 +174,24 @@ class GasPhase:
 
     # ------------------------------------------------------------------ checkpoint state
     def state(self) -> dict:
-        s = self.solver
-        state = {"gas.velocity": s.velocity, "gas.pressure": s.pressure, "gas.face_flux": s.face_flux,
-                 "gas.voidage": s.voidage, "gas.beta": s.beta,
-                 "gas.face_pressure": s.face_pressure if s.face_pressure is not None else np.zeros(0),
-                 "gas.gradient_correction": s.gradient_correction,
-                 "gas.returned_momentum": self.returned_momentum,
-                 "gas.counters": np.array([self.step_count, s._steps_since_factor, s.factorizations,
-                                           s._iterations_since_factor, int(s._refactor_due)])}
-        if s._pressure_lu is not None:  # the preconditioner's matrix, to refactor it identically
-            m = s._pressure_factor_matrix
-            state.update({"gas.preconditioner.data": m.data, "gas.preconditioner.indices": m.indices,
-                          "gas.preconditioner.indptr": m.indptr, "gas.preconditioner.shape": np.array(m.shape)})
+        """The solver's state (``GasSolver.state``) under ``gas.``, with the phase's returned momentum and
+        its step count first in ``gas.counters`` (the checkpoint format of 0.2.0)."""
+        solver = self.solver.state()
+        counters = solver.pop("counters")
+        state = {f"gas.{k}": v for k, v in solver.items()}
+        state.update({"gas.returned_momentum": self.returned_momentum,
+                      "gas.counters": np.array([self.step_count, *counters])})
         return state
 
     def restore(self, data) -> None:
-        s = self.solver
-        for name in ("velocity", "pressure", "face_flux", "voidage", "beta"):
-            setattr(s, name, np.array(data[f"gas.{name}"], copy=True))
-        face_pressure = np.array(data["gas.face_pressure"], copy=True) if "gas.face_pressure" in data else np.zeros(0)
-        s.face_pressure = face_pressure if len(face_pressure) else None
+        counters = [int(v) for v in data["gas.counters"]] + [0, 0]  # older checkpoints: 3 counters
+        self.step_count = counters[0]
+        solver = {k[4:]: data[k] for k in data if k.startswith("gas.") and k != "gas.counters"}
+        solver["counters"] = counters[1:5]
+        self.solver.restore(solver)
         if "gas.returned_momentum" in data:
             self.returned_momentum = np.array(data["gas.returned_momentum"], copy=True)
-        if "gas.gradient_correction" in data:
-            s.gradient_correction = np.array(data["gas.gradient_correction"], copy=True)
-        s.voidage_old = s.voidage.copy()
-        counters = [int(v) for v in data["gas.counters"]] + [0, 0]  # older checkpoints: 3 counters
-        self.step_count, since_factor, s.factorizations, iterations_since, refactor_due = counters[:5]
         if self.inlet_ramp > 0.0:
             # the inlet as the uninterrupted run left it: __init__ set it to 0 for the ramp's start, and
             # the ramp only updates it while it lasts (a run resumed after its end kept no inflow at all)
-            s.set_inlet_velocity(self.inlet_velocity_at(self.step_count * self.dt))
-        if "gas.preconditioner.data" in data and s._multigrid is None:  # (multigrid keeps no preconditioner)
-            import scipy.sparse as sp
-            matrix = sp.csc_matrix((data["gas.preconditioner.data"], data["gas.preconditioner.indices"],
-                                    data["gas.preconditioner.indptr"]), shape=tuple(data["gas.preconditioner.shape"]))
-            s.set_preconditioner_matrix(matrix, since_factor, iterations_since)
-            s._refactor_due = bool(refactor_due)
+            self.solver.set_inlet_velocity(self.inlet_velocity_at(self.step_count * self.dt))

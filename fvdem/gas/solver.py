@@ -433,6 +433,41 @@ class GasSolver:
         self._iterations_since_factor = iterations_since_factor
         self._refactor_due = False
 
+    # ------------------------------------------------------------------ checkpoint state
+    STATE_FIELDS = ("velocity", "pressure", "face_flux", "voidage", "beta")
+
+    def state(self) -> dict:
+        """Everything a solver needs to continue bit-for-bit: its fields, the last step's face pressure and
+        gradient correction, the preconditioner's counters ``counters`` (steps and iterations since its
+        factorization, factorizations, whether a refactorization is due) and, when it has one, the matrix
+        it factorized (``preconditioner.*``: refactoring it reproduces the factorization)."""
+        state = {name: getattr(self, name) for name in self.STATE_FIELDS}
+        state.update({"face_pressure": self.face_pressure if self.face_pressure is not None else np.zeros(0),
+                      "gradient_correction": self.gradient_correction,
+                      "counters": np.array([self._steps_since_factor, self.factorizations,
+                                            self._iterations_since_factor, int(self._refactor_due)])})
+        if self._pressure_lu is not None:
+            m = self._pressure_factor_matrix
+            state.update({"preconditioner.data": m.data, "preconditioner.indices": m.indices,
+                          "preconditioner.indptr": m.indptr, "preconditioner.shape": np.array(m.shape)})
+        return state
+
+    def restore(self, data) -> None:
+        """Load a ``state()`` (copies; keys missing from older checkpoints keep their defaults)."""
+        for name in self.STATE_FIELDS:
+            setattr(self, name, np.array(data[name], copy=True))
+        face_pressure = np.array(data["face_pressure"], copy=True) if "face_pressure" in data else np.zeros(0)
+        self.face_pressure = face_pressure if len(face_pressure) else None
+        if "gradient_correction" in data:
+            self.gradient_correction = np.array(data["gradient_correction"], copy=True)
+        self.voidage_old = self.voidage.copy()
+        since_factor, self.factorizations, iterations_since, refactor_due = [int(v) for v in data["counters"]]
+        if "preconditioner.data" in data and self._multigrid is None:  # (multigrid keeps no preconditioner)
+            matrix = sp.csc_matrix((data["preconditioner.data"], data["preconditioner.indices"],
+                                    data["preconditioner.indptr"]), shape=tuple(data["preconditioner.shape"]))
+            self.set_preconditioner_matrix(matrix, since_factor, iterations_since)
+            self._refactor_due = bool(refactor_due)
+
     def _plan_refactor(self) -> None:
         """After a step: refactor the preconditioner at the next step when this step's CG iterations
         exceed the average cost per step since the last factorization, the factorization counted as

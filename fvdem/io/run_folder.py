@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..case import Case, to_toml
+from ..errors import OutputError  # noqa: F401  (re-exported: fvdem.io.run_folder.OutputError)
 from .checkpoint import save_checkpoint
 from .vtk import write_gas_vtu, write_particles_vtu, write_pvd
 
@@ -57,10 +58,6 @@ class RunState:
         """The state saved in a checkpoint; ``histories``: the scene's empty ones, for any it lacks."""
         meta = upgrade_writer_state(meta)
         return cls(snapshots=meta.pop("snapshots", {}), histories={**histories, **meta.pop("histories", {})}, **meta)
-
-
-class OutputError(RuntimeError):
-    """The output folder cannot be used as asked (exists, or nothing to resume)."""
 
 
 def prepare_output(out_dir, overwrite: bool = False, resume: bool = False) -> Path:
