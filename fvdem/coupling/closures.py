@@ -22,6 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..correlations import ergun_beta_per_solids  # noqa: F401  (also fvdem.coupling.closures.ergun_beta_per_solids)
+
+
 # --------------------------------------------------------------------------- shape
 def spherocylinder_shape(diameter, length):
     """Volume-equivalent diameter [m], volume [m^3] and surface [m^2] of a spherocylinder of cylinder
@@ -95,14 +98,6 @@ def single_particle_drag(slip, voidage, d_p, rho, mu, phi=1.0, crosswise=1.0, le
 
 # --------------------------------------------------------------------------- Gidaspow (Ergun / Wen-Yu)
 GIDASPOW_SWITCH = 0.8  # voidage below which Ergun applies, above it Wen-Yu (Gidaspow 1994)
-
-
-def ergun_beta_per_solids(voidage, speed, d, rho, mu):
-    """Ergun's (1952) interphase coefficient divided by the solids fraction, ``beta / eps_s``
-    [kg/(m^3 s)] = ``150 eps_s mu / (eps d^2) + 1.75 rho |u| / d`` at the interstitial slip speed ``|u|``
-    [m/s] and diameter ``d`` [m]. In model A a uniform fixed bed then has Ergun's pressure gradient
-    ``eps_s (beta / eps_s) |u| / eps``. Kept per solids fraction so that it stays finite at ``eps = 1``."""
-    return 150.0 * (1.0 - voidage) * mu / (voidage * d ** 2) + 1.75 * rho * speed / d
 
 
 def gidaspow_drag_coefficient(slip, voidage, d_p, rho, mu, sphericity=1.0):

@@ -6,7 +6,7 @@ from time import perf_counter
 
 import numpy as np
 
-from ..coupling.closures import ergun_beta_per_solids
+from ..correlations import ergun_beta_per_solids
 from ..errors import SimulationError
 from .mesh import GasMesh
 from .solver import GasProperties, GasSolver
