@@ -21,6 +21,7 @@ from typing import Any
 
 from .coupling.closures import describe_laws, law, law_names
 from .coupling.voidage import describe_voidage, voidage_names
+from .dem.backends import backend_names, describe_backends
 from .dem.contact_law import collision_time
 from .errors import CaseError  # noqa: F401  (re-exported: fvdem.case.CaseError)
 from .dem.particles import spherocylinder_volume, volume_equivalent_diameter
@@ -57,6 +58,7 @@ REGISTRIES = {
     "lift": (lambda: law_names("lift"), lambda: describe_laws("lift"), "fvdem.coupling.closures"),
     "torque": (lambda: law_names("torque"), lambda: describe_laws("torque"), "fvdem.coupling.closures"),
     "voidage": (voidage_names, describe_voidage, "fvdem.coupling.voidage"),
+    "dem_backend": (backend_names, describe_backends, "fvdem.dem.backends"),
 }
 
 
@@ -295,6 +297,8 @@ class SuspensionConfig:
 @dataclass(frozen=True)
 class RunConfig:
     threads: int = spec(0, kind="int", ge=0, le=4096, doc="numba threads (0: all cores)")
+    dem_backend: str = spec("cpu", kind="str", registry="dem_backend",
+                            doc="the DEM's implementation (docs/ARCHITECTURE.md, \"Add a DEM backend\")")
 
 
 @dataclass(frozen=True)

@@ -193,8 +193,8 @@ def cmd_info(args) -> int:
 
 
 def registered(kind: str | None = None) -> dict:
-    """What the registries hold: drag, lift and torque laws, voidage methods and scenes, each name with
-    what it is, where it applies and its reference."""
+    """What the registries hold: drag, lift and torque laws, voidage methods, scenes and DEM backends, each
+    name with what it is, where it applies and its reference."""
     from .coupling.closures import LAWS
     from .coupling.voidage import METHODS
     from .scenes import SCENES
@@ -203,6 +203,8 @@ def registered(kind: str | None = None) -> dict:
              for k, laws in LAWS.items()}
     table["voidage"] = {name: {"summary": m.summary, "reference": m.reference} for name, m in METHODS.items()}
     table["scenes"] = {name: {"summary": s.summary} for name, s in SCENES.items()}
+    from .dem.backends import BACKENDS
+    table["dem_backend"] = {name: {"summary": description} for name, (_, description) in BACKENDS.items()}
     return table if kind is None else {kind: table[kind]}
 
 
@@ -339,8 +341,8 @@ def make_parser() -> argparse.ArgumentParser:
                         help="a JSON Schema of case files or study files, for an editor's TOML checks "
                              "(docs/schema/ holds copies)")
     schema.set_defaults(func=cmd_schema)
-    laws = sub.add_parser("laws", help="list the registered closures, voidage methods and scenes")
-    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes"),
+    laws = sub.add_parser("laws", help="list the registered closures, voidage methods, scenes and DEM backends")
+    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes", "dem_backend"),
                       help="only this registry (default: all)")
     laws.add_argument("--json", action="store_true", help="one JSON object")
     laws.set_defaults(func=cmd_laws)

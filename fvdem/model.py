@@ -20,6 +20,7 @@ import numpy as np
 
 from .case import Case, CaseError
 from .coupling.bridge import CouplingBridge
+from .dem.backends import build_backend
 from .dem.insertion import insert_particles
 from .dem.packing import compress_periodic
 from .dem.particles import ParticleArrays
@@ -107,12 +108,13 @@ def build_particles(case: Case) -> ParticleArrays:
 
 
 def build_dem(case: Case, particles: ParticleArrays) -> DEMSystem:
+    """The case's DEM on its backend (``run.dem_backend``; ``fvdem.dem.backends``)."""
     c = case.contact
     contact = ContactModel(c.normal_stiffness, c.restitution, c.friction, c.rolling_friction,
                            c.tangential_stiffness_ratio, c.tangential_damping_ratio)
     box = Box(case.domain.lower, case.domain.upper, case.domain.periodic)
-    return DEMSystem(particles, box, contact, case.time.dem_step, case.domain.gravity,
-                     case.contact.neighbour_skin)  # None: the adaptive skin
+    return build_backend(case.run.dem_backend, particles, box, contact, case.time.dem_step, case.domain.gravity,
+                         case.contact.neighbour_skin)  # None: the adaptive skin
 
 
 class Model:

@@ -1,0 +1,73 @@
+"""DEM backends, registered by name (the case key ``run.dem_backend``), and the interface the rest of fvdem
+uses of one. Today there is one backend, ``cpu``: ``DEMSystem``, numba kernels on the host's cores.
+
+The interface (``DEMBackend``) is what the model, the coupling bridge, the scenes and the run monitors
+touch of a DEM, and nothing else:
+
+- ``particles``: the host view of the particle arrays (``ParticleArrays``): positions, velocities,
+  orientations and colours the observables and writers read; the coupling inputs the bridge writes
+  (``drag_coefficient``, ``fluid_velocity``, ``external_force``, ``external_torque``) and the drag impulse
+  it reads back (``drag_impulse``). A backend that keeps its arrays elsewhere (a GPU) copies them here
+  when asked, and the bridge owns when that happens.
+- ``implicit_drag`` (bool, set by the bridge): the kicks integrate ``drag_coefficient (fluid_velocity - v)``.
+- ``step(steps)``, ``step_count``, ``time``, ``dt``, ``gravity``, ``box``.
+- ``diagnostics()`` (scalars: kinetic energy, largest overlap, contacts, speeds), ``rebuild_count``,
+  ``check_health()`` (``SimulationError`` with the cause), ``timings`` (``fvdem.timing.Timings``, shared
+  with the run: phases ``neighbour_list``, ``contact_forces``, ``integration``).
+- ``state()`` / ``restore(data)``: every array needed to continue bit-for-bit (checkpoints).
+
+Add one: docs/ARCHITECTURE.md, "Add a DEM backend".
+"""
+from __future__ import annotations
+
+from typing import Callable, Protocol, runtime_checkable
+
+
+@runtime_checkable
+class DEMBackend(Protocol):
+    """What fvdem uses of a DEM (see the module docstring)."""
+
+    particles: object
+    implicit_drag: bool
+    dt: float
+    step_count: int
+    rebuild_count: int
+
+    def step(self, steps: int = 1) -> None: ...
+    def diagnostics(self) -> dict: ...
+    def check_health(self) -> None: ...
+    def state(self) -> dict: ...
+    def restore(self, data) -> None: ...
+
+
+# name -> (factory(particles, box, contact, dt, gravity, skin) -> DEMBackend, one line on what it is)
+BACKENDS: dict[str, tuple[Callable, str]] = {}
+
+
+def register_backend(name: str, factory: Callable, description: str) -> None:
+    """Make a backend available to ``run.dem_backend``."""
+    BACKENDS[name] = (factory, description)
+
+
+def backend_names() -> list:
+    return sorted(BACKENDS)
+
+
+def describe_backends() -> str:
+    return "; ".join(f"`{name}`: {BACKENDS[name][1]}" for name in backend_names())
+
+
+def build_backend(name: str, particles, box, contact, dt, gravity, skin) -> DEMBackend:
+    """The DEM of backend ``name`` (a name ``run.dem_backend`` was checked against)."""
+    factory, _ = BACKENDS[name]
+    return factory(particles, box, contact, dt, gravity, skin)
+
+
+def _cpu(particles, box, contact, dt, gravity, skin):
+    from .system import DEMSystem
+    return DEMSystem(particles, box, contact, dt, gravity, skin)
+
+
+register_backend("cpu", _cpu, "numba kernels on the host's cores (DEMSystem; struct-of-arrays, race-free blocks)")
+
+__all__ = ["DEMBackend", "BACKENDS", "register_backend", "backend_names", "describe_backends", "build_backend"]
