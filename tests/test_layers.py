@@ -38,3 +38,13 @@ def test_the_gas_and_the_dem_import_nothing_above_them(layer):
 def test_the_leaf_modules_import_no_other_fvdem_module():
     for leaf in sorted(LEAVES):
         assert not _fvdem_imports(PACKAGE / f"{leaf}.py", ""), leaf
+
+
+def test_the_bridge_talks_to_the_gas_through_its_interface_only():
+    """The coupling bridge uses GasPhase's bridge interface (set_voidage, set_exchange, step, flux_velocity,
+    pressure_gradient, exchange_lost, return_momentum, mesh, mean_pressure_gradient), never the solver or
+    the phase's exchange arrays."""
+    tree = ast.parse((PACKAGE / "coupling" / "bridge.py").read_text())
+    private = {"solver", "exchange_beta", "exchange_source", "returned_momentum"}
+    used = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
+    assert not used & private, sorted(used & private)

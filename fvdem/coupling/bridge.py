@@ -149,7 +149,7 @@ class CouplingBridge:
     def advance(self) -> None:
         """One CFD step of the gas and ``substeps`` DEM steps of the particles, coupled."""
         dem, gas, cfg = self.dem, self.gas, self.config
-        p, s, mesh = dem.particles, gas.solver, self.mesh
+        p, mesh = dem.particles, self.mesh
         dt = self.cfd_step
         clock, timings = perf_counter, dem.timings
         t_start = clock()
@@ -167,7 +167,7 @@ class CouplingBridge:
             deposited += clock() - t
             return out
         # voidage and gas velocity at the particles in one pass over the weights
-        at_particles = grid_map.gather(np.column_stack([eps, s.flux_velocity()]))
+        at_particles = grid_map.gather(np.column_stack([eps, gas.flux_velocity()]))
         n = p.count
         eps_p, slip = slip_at_particles(at_particles, p.velocity, cfg.minimum_voidage, self.fixed, np.empty(n),
                                         np.empty((n, 3)))
@@ -193,7 +193,7 @@ class CouplingBridge:
         t_gas = clock()
         gas.step()
         t_after_gas = clock()
-        fields = [s.flux_velocity()] + ([s.pressure_gradient()] if cfg.pressure_gradient_force else [])
+        fields = [gas.flux_velocity()] + ([gas.pressure_gradient()] if cfg.pressure_gradient_force else [])
         at_particles = grid_map.gather(np.column_stack(fields))  # one pass for both
         # u at the particles, and -V_p grad p (+ V_p G, an imposed mean gradient acting on both phases)
         # + lift + explicit drag held over the interval, written straight into the particles' rows
@@ -223,10 +223,10 @@ class CouplingBridge:
         if impulse is not None and cfg.two_way:
             # the gas lost V (beta u - S) dt per cell (u its momentum velocity); the particles gained
             # the drag impulse the kicks applied (with the flux velocity): return the difference
-            lost = (gas.exchange_beta[:, None] * s.velocity - gas.exchange_source) * volume_cells * dt
+            lost = gas.exchange_lost(dt)
             # the lift is explicit on both sides: not in the balance (one deposition of both)
             difference = lost - scatter(impulse if lift is None else impulse + lift * dt)
-            gas.returned_momentum += difference  # a source of the next gas step
+            gas.return_momentum(difference)  # a source of the next gas step
             returned = float(np.abs(difference.sum(axis=0)).max())
         drag_force = column_sums(explicit_drag) if impulse is None else column_sums(impulse) / dt
         self.last.update(drag_force=drag_force, pressure_force=pressure_force, momentum_returned=returned)

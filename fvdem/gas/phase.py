@@ -65,6 +65,28 @@ class GasPhase:
         s.voidage_old[:] = s.voidage if previous is None else previous
         s.voidage[:] = voidage
 
+    # ------------------------------------------------------------------ the coupling bridge's interface
+    # set_voidage and set_exchange in; step; flux_velocity, pressure_gradient and exchange_lost out;
+    # return_momentum for what the particles did not receive (docs/coupling.md)
+    def flux_velocity(self) -> np.ndarray:
+        """Cell velocities consistent with the face fluxes [m/s] (N, 3): what the particles see."""
+        return self.solver.flux_velocity()
+
+    def pressure_gradient(self) -> np.ndarray:
+        """Cell pressure gradient [Pa/m] (N, 3) of the last step."""
+        return self.solver.pressure_gradient()
+
+    def exchange_lost(self, dt: float) -> np.ndarray:
+        """Momentum the gas gave the particles through the exchange over ``dt`` [kg m/s] per cell (N, 3):
+        ``V (beta u - S) dt`` with the exchange set for the step and the gas's momentum velocity ``u``."""
+        return (self.exchange_beta[:, None] * self.solver.velocity - self.exchange_source) * \
+            self.mesh.cell_volumes[:, None] * dt
+
+    def return_momentum(self, momentum) -> None:
+        """Momentum [kg m/s] per cell (N, 3) the gas lost that the particles did not receive: a source of the
+        next step (so that the exchange conserves momentum)."""
+        self.returned_momentum += momentum
+
     def set_exchange(self, beta, source) -> None:
         """Interphase momentum exchange of the next step: ``-beta u + source`` per unit volume (Eq. 8)."""
         self.exchange_beta[:] = beta
