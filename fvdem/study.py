@@ -527,25 +527,22 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
                 "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
                 "wall_seconds": time.perf_counter() - started, "log_tail": log_tail(run.folder)}
     summary = outcome["summary"]
-    if outcome["status"] == "paused":
-        _retire_this_worker()
     return {"name": run.name, "family": run.family, "status": outcome["status"], "t95": summary.get("t95"),
             "folder": run.folder, "simulated_seconds": summary["simulated_time"], "point": run.point,
             "pressure_drop_over_weight": summary.get("pressure_drop_over_weight"),
-            "wall_seconds": time.perf_counter() - started, **({"started": outcome["started"]}
-                                                               if "started" in outcome else {})}
+            "wall_seconds": time.perf_counter() - started,
+            **({"started": outcome["started"], "worker": _worker_address()}
+               if outcome["status"] == "paused" else {})}
 
 
-def _retire_this_worker() -> None:
-    """A run paused for its job's walltime: the job's worker takes no further run and leaves once this
-    task's result is out, so the job ends and the cluster's adaptive scaling starts a fresh one (no-op
-    outside a Dask worker)."""
+def _worker_address() -> str | None:
+    """The Dask worker running this task (None outside one): a paused run names it, so that the study
+    retires it (its job is at its end) before the run goes back into the queue."""
     try:
         from distributed import get_worker
-        worker = get_worker()
+        return get_worker().address
     except (ImportError, ValueError):
-        return
-    worker.loop.add_callback(worker.close_gracefully, reason="fvdem: a run paused before the job's walltime")
+        return None
 
 
 # --------------------------------------------------------------------------- the scheduler side
@@ -827,6 +824,14 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             if result.get("started", True):
                 count = count + 1 if result["simulated_seconds"] <= reached else 0
             stalls[run.name] = (count, max(reached, result["simulated_seconds"]))
+            if result.get("worker"):
+                # the job is at its end: its worker takes no further run (retired before the resubmission,
+                # or the scheduler could hand the run straight back to it), and adaptive scaling starts a
+                # fresh job
+                try:
+                    client.retire_workers(workers=[result["worker"]], close_workers=True)
+                except Exception:  # noqa: BLE001  (already gone: its job ended)
+                    pass
             if count >= MAX_STALLS or (out / STOP_FILE).exists():
                 return None
             attempts[run.name] += 1
