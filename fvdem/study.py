@@ -271,7 +271,7 @@ CLUSTER_TYPES = {"workers": (int, "an integer >= 1 (jobs, or local worker proces
                  "memory": (str, "a memory size such as \"4GB\"",
                             lambda v: re.fullmatch(r"\s*\d+(\.\d+)?\s*([kKmMgGtT]i?[bB]?|[bB])\s*", v) is not None),
                  "walltime": (str, "a walltime such as \"24:00:00\" or \"1-00:00:00\"",
-                              lambda v: re.fullmatch(r"(\d+-)?\d+(:\d{2}){0,2}", v.strip()) is not None),
+                              lambda v: walltime_seconds(v) is not None),
                  "queue": (str, "a queue or partition name", lambda v: bool(v.strip())),
                  "account": (str, "an account name", lambda v: bool(v.strip())),
                  "job_extra_directives": (list, "a list of strings", lambda v: all(isinstance(x, str) for x in v)),
@@ -327,7 +327,7 @@ def walltime_seconds(text: str) -> int | None:
     """Seconds of a batch walltime, SLURM's forms: ``minutes``, ``minutes:seconds``, ``hours:minutes:seconds``,
     ``days-hours``, ``days-hours:minutes``, ``days-hours:minutes:seconds`` (PBS, SGE and LSF's ``HH:MM:SS``
     among them); None if it is none of these."""
-    match = re.fullmatch(r"\s*(?:(\d+)-)?(\d+(?::\d{1,2}){0,2})\s*", str(text))
+    match = re.fullmatch(r"\s*(?:(\d+)-)?(\d+(?::\d{2}){0,2})\s*", str(text))
     if match is None:
         return None
     days, parts = match[1], [int(x) for x in match[2].split(":")]
@@ -810,8 +810,12 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
     try:
         beds = {b.name: client.submit(prepare_bed, b, threads, key=f"{tag}bed-{b.name}", pure=False,
                                       priority=_bed_priority(b)) for b in study.beds}
-        futures = [client.submit(run_task, r, threads, beds.get(r.bed) if r.bed else None, key=f"{tag}run-{r.name}",
-                                 pure=False, priority=_priority(r)) for r in study.runs]
+
+        def submit(run, key):
+            return client.submit(run_task, run, threads, beds.get(run.bed) if run.bed else None, key=key, pure=False,
+                                 priority=_priority(run))
+
+        futures = [submit(r, f"{tag}run-{r.name}") for r in study.runs]
         run_of = {future.key: run for future, run in zip(futures, study.runs)}
         attempts = {r.name: 1 for r in study.runs}
         stalls: dict[str, tuple] = {}  # run -> (paused attempts in a row without progress, time reached)
@@ -837,8 +841,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             attempts[run.name] += 1
             bar.message(f"{run.name}: paused at t = {result['simulated_seconds']:.4g} s before its job's walltime; "
                         f"resubmitted (attempt {attempts[run.name]})")
-            retry = client.submit(run_task, run, threads, beds.get(run.bed) if run.bed else None,
-                                  key=f"{tag}run-{run.name}-{attempts[run.name]}", pure=False, priority=_priority(run))
+            retry = submit(run, f"{tag}run-{run.name}-{attempts[run.name]}")
             run_of[retry.key] = run
             return retry
 
