@@ -356,7 +356,9 @@ def _duration_seconds(text) -> float | None:
 # (stop_before_walltime): the current chunk, the checkpoint and the worker's shutdown must fit in it
 DEFAULT_STOP_BEFORE_WALLTIME = 300.0
 JOB_END_ENV, STOP_MARGIN_ENV = "FVDEM_JOB_END", "FVDEM_STOP_MARGIN"
-PAUSED_RETURN_DELAY = 10.0  # s: how long a job past its deadline holds a run it cannot start
+# s: how long a worker past its job's deadline holds a run it cannot start before it gives it back; the study
+# retires such a worker (``_retire``), so this only paces the returns when Dask declined to retire it
+PAUSED_RETURN_DELAY = 2.0
 MAX_STALLS = 3  # paused attempts in a row that started and made no progress: the walltime is too short
 
 
@@ -469,8 +471,7 @@ def _simulate(case_path, overrides, folder, threads, deadline: float | None = No
     if stop_file.exists():
         return {"status": "stopped", "summary": so_far}
     if deadline is not None and time.time() >= deadline:
-        # a job on its way out took the run: give it back, not at once (the worker retires within half the
-        # margin; until then each resubmission would come straight back to it)
+        # a job on its way out took the run: give it back (the study then retires this worker)
         time.sleep(PAUSED_RETURN_DELAY)
         return {"status": "paused", "started": False, "summary": so_far}
     stop = _StopWhen(stop_file, deadline)
@@ -533,6 +534,25 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
             "wall_seconds": time.perf_counter() - started,
             **({"started": outcome["started"], "worker": _worker_address()}
                if outcome["status"] == "paused" else {})}
+
+
+def _retire(client, address: str, seconds: float = 10.0) -> bool:
+    """Retire and close the worker at ``address`` (its job is at its walltime); tried again for up to
+    ``seconds`` while Dask declines because a key released just before (the paused run's, its bed's) still
+    lives only there. Returns whether it left; if it did not, ``PAUSED_RETURN_DELAY`` paces the run's
+    returns to it until its lifetime ends it."""
+    deadline = time.time() + seconds
+    while True:
+        try:
+            if address in client.retire_workers(workers=[address], close_workers=True):
+                return True
+            if address not in client.scheduler_info().get("workers", {}):
+                return True
+        except Exception:  # noqa: BLE001  (already gone: its job ended)
+            return True
+        if time.time() >= deadline:
+            return False
+        time.sleep(0.25)
 
 
 def _worker_address() -> str | None:
@@ -815,12 +835,15 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             return client.submit(run_task, run, threads, beds.get(run.bed) if run.bed else None, key=key, pure=False,
                                  priority=_priority(run))
 
-        futures = [submit(r, f"{tag}run-{r.name}") for r in study.runs]
-        run_of = {future.key: run for future, run in zip(futures, study.runs)}
+        run_of, pending = {}, set()  # the futures live in ``pending`` only (a finished one is let go)
+        for run in study.runs:
+            future = submit(run, f"{tag}run-{run.name}")
+            run_of[future.key] = run
+            pending.add(future)
         attempts = {r.name: 1 for r in study.runs}
         stalls: dict[str, tuple] = {}  # run -> (paused attempts in a row without progress, time reached)
 
-        def resubmit(run, result):
+        def resubmit(run, result, future):
             """A run paused before its job's walltime goes back into the queue under a new key, however many
             jobs it takes; None after ``MAX_STALLS`` started attempts in a row without progress (or when
             the study is stopping)."""
@@ -831,11 +854,12 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             if result.get("worker"):
                 # the job is at its end: its worker takes no further run (retired before the resubmission,
                 # or the scheduler could hand the run straight back to it), and adaptive scaling starts a
-                # fresh job
-                try:
-                    client.retire_workers(workers=[result["worker"]], close_workers=True)
-                except Exception:  # noqa: BLE001  (already gone: its job ended)
-                    pass
+                # fresh job. Dask retires a worker only when no key lives on it alone, so the paused run's
+                # result and its bed's state (now passed by value) are released first.
+                if run.bed and not isinstance(beds[run.bed], str):
+                    beds[run.bed] = beds[run.bed].result()
+                client.cancel([future])
+                _retire(client, result["worker"])
             if count >= MAX_STALLS or (out / STOP_FILE).exists():
                 return None
             attempts[run.name] += 1
@@ -849,7 +873,6 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         results, done = [], 0.0
         write_index(out, study, description=description)
         bar = _StudyProgress(study, started, log)
-        pending = set(futures)
         while pending:
             try:
                 finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
@@ -866,7 +889,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                               "folder": run.folder, "t95": None, "simulated_seconds": 0.0, "point": run.point,
                               **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
                 if result["status"] == "paused":
-                    retry = resubmit(run_of[future.key], result)
+                    retry = resubmit(run_of[future.key], result, future)
                     if retry is not None:
                         pending.add(retry)
                         write_index(out, study, [*results, result], description)
@@ -879,7 +902,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                 done += result.get("simulated_seconds", 0.0) if result["status"] != "failed" else 0.0
                 detail = result.get("error") or (f"t95 {result['t95']:.3g} s" if result.get("t95") is not None
                                                  else "t95 -")
-                bar.message(progress_line(len(results), len(futures), result["name"], result["status"], detail,
+                bar.message(progress_line(len(results), len(study.runs), result["name"], result["status"], detail,
                                           started, done, total, " simulated s"))
                 write_index(out, study, results, description)
             bar.update(len(results))

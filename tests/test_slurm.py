@@ -146,21 +146,31 @@ def test_the_smoke_study_runs_through_sbatch_jobs_and_finishes(slurm, tmp_path):
 @pytest.mark.slow
 def test_a_run_longer_than_its_jobs_walltime_pauses_is_resubmitted_and_ends_bit_for_bit(slurm, tmp_path):
     """Jobs of 1 minute that stop their run 50 s before the walltime: the run checkpoints, pauses, goes back
-    into the queue, resumes in the next job (adaptive scaling starts it), however many it takes, and ends
-    bit-for-bit where the same run ends uninterrupted. The run (5 s of the small bed, about 24 s of one idle
-    core here) is more than twice what one job leaves it (10 s less the worker's start): it needs two jobs
-    or more on a machine up to twice this one's speed (2.5 s of it once fitted into one job of 15 s)."""
+    into the queue, resumes in the next job (the study retires the old job's worker and adaptive scaling
+    starts a new job), however many it takes, and ends bit-for-bit where the same run ends uninterrupted.
+    Each job leaves the run 10 s less the worker's start, 0.65-1.05 simulated s of the small bed here (about
+    5 s of wall time per simulated s on one core): the run of 3 s needs three jobs or more on this machine
+    and two on one twice as fast. Dask's lost-worker-timeout (15 s, how long a gone worker's job is still
+    counted before a new one is started) is shortened to 1 s for the test; a retired worker does not come
+    back."""
     from fvdem.study import load_study, prepare_bed, run_task
-    study_file = _long_smoke(tmp_path, 5.0)
+    study_file = _long_smoke(tmp_path, 3.0)
     cluster = _cluster_file(tmp_path / "slurm.toml", workers=1, walltime="00:01:00", stop_before_walltime="50s")
+    environ = {**os.environ, "DASK_DISTRIBUTED__DEPLOY__LOST_WORKER_TIMEOUT": "1s"}
+    started = time.time()
     result = subprocess.run([*FVDEM, "study", str(study_file), "--out", str(tmp_path / "out"), "--cluster", str(cluster),
                              "--only", "ar1_u_over_umf2", "--json"], capture_output=True, text=True, timeout=600,
-                            cwd=tmp_path)
+                            cwd=tmp_path, env=environ)
     assert result.returncode == 0, result.stderr[-3000:]
     assert "before its job's walltime; resubmitted" in result.stdout + result.stderr
     folder = tmp_path / "out" / "runs" / "ar1_u_over_umf2"
     log = (folder / "run.log").read_text()
-    assert log.count("resumed at t = ") >= 1, log[-2000:]
+    resumes = log.count("resumed at t = ")
+    assert resumes >= 1, log[-2000:]
+    # one resumption per job: each paused run's worker was retired, none took the run back past its deadline
+    jobs = len(list((tmp_path / "dask-logs").glob("*.err")))
+    assert resumes == jobs - 1, (resumes, jobs, log[-2000:])
+    print(f"{jobs} jobs, {time.time() - started:.0f} s")
     # the same run uninterrupted, here
     study = load_study(study_file, tmp_path / "whole")
     bed = prepare_bed(study.beds[0], 1)
