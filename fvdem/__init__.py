@@ -8,7 +8,7 @@ Library use::
     sim.run(0.05)
     print(sim.diagnostics())
 """
-__version__ = "0.2.0"
+from .version import __version__  # noqa: F401
 
 import os as _os  # noqa: E402
 

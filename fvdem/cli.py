@@ -85,10 +85,11 @@ def cmd_run(args) -> int:
 
 def cmd_report(args) -> int:
     from .analysis.plots import report
+    from .scenes import plots_of
     out = Path(args.out)
     if not (out / "timeseries.csv").exists():
         return _fail(f"{out} is not a run folder (no timeseries.csv)")
-    for path in report(out):
+    for path in report(out, plots_of(out)):
         print(path)
     return 0
 
@@ -185,7 +186,7 @@ def cmd_info(args) -> int:
         for i in prange(a.shape[0]):
             a[i] += 1.0
     _touch(numpy.zeros(2))
-    from . import __version__
+    from .version import __version__
     print(json.dumps({"fvdem": __version__, "numpy": numpy.__version__, "numba": numba.__version__,
                       "threads_available": numba.config.NUMBA_NUM_THREADS,
                       "threading_layer": numba.threading_layer()}, indent=2))
@@ -193,8 +194,8 @@ def cmd_info(args) -> int:
 
 
 def registered(kind: str | None = None) -> dict:
-    """What the registries hold: drag, lift and torque laws, voidage methods, scenes and DEM backends, each
-    name with what it is, where it applies and its reference."""
+    """What the registries hold: drag, lift and torque laws, voidage methods, scenes, DEM backends and study
+    reports, each name with what it is, where it applies and its reference."""
     from .coupling.closures import LAWS
     from .coupling.voidage import METHODS
     from .scenes import SCENES
@@ -205,6 +206,9 @@ def registered(kind: str | None = None) -> dict:
     table["scenes"] = {name: {"summary": s.summary} for name, s in SCENES.items()}
     from .dem.backends import BACKENDS
     table["dem_backend"] = {name: {"summary": description} for name, (_, description) in BACKENDS.items()}
+    from .study import REPORTS, report_for
+    report_for(None)  # every registered report
+    table["report"] = {name: {"summary": r.summary} for name, r in REPORTS.items()}
     return table if kind is None else {kind: table[kind]}
 
 
@@ -267,7 +271,7 @@ def positive_count(text: str) -> int:
 
 
 def version_text() -> str:
-    from . import __version__
+    from .version import __version__
     from .provenance import source_commit
     commit = source_commit()
     return f"fvdem {__version__}" + (f" (commit {commit})" if commit else "")
@@ -341,8 +345,8 @@ def make_parser() -> argparse.ArgumentParser:
                         help="a JSON Schema of case files or study files, for an editor's TOML checks "
                              "(docs/schema/ holds copies)")
     schema.set_defaults(func=cmd_schema)
-    laws = sub.add_parser("laws", help="list the registered closures, voidage methods, scenes and DEM backends")
-    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes", "dem_backend"),
+    laws = sub.add_parser("laws", help="list the registered closures, voidage methods, scenes, DEM backends and study reports")
+    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes", "dem_backend", "report"),
                       help="only this registry (default: all)")
     laws.add_argument("--json", action="store_true", help="one JSON object")
     laws.set_defaults(func=cmd_laws)

@@ -98,7 +98,8 @@ def case_keys(cls=Case, prefix: str = "") -> list[str]:
 
 def study_schema() -> dict:
     """The JSON Schema of a study file (``fvdem.study``): its tables, the case keys its settings take."""
-    from .study import CLUSTER_KINDS
+    from .study import CLUSTER_KINDS, REPORTS, report_for
+    report_for(None)  # every registered report
     settings = {"type": "object", "propertyNames": {"enum": case_keys()},
                 "description": "case keys (dotted, e.g. \"gas.inlet_ramp\") and their values"}
     seconds = {"type": "number", "exclusiveMinimum": 0, "maximum": 1e6}
@@ -119,6 +120,8 @@ def study_schema() -> dict:
                 "name": {"type": "string"}, "description": {"type": "string"},
                 "duration": {**seconds, "description": "simulated seconds of every run (time.end)"},
                 "replicas": replicas, "settings": settings,
+                "report": {"enum": sorted(REPORTS), "default": "mema2020",
+                           "description": "the study's table, figures and findings (fvdem laws report)"},
                 "beds": {"type": "object", "additionalProperties": bed,
                          "description": "settled beds, each prepared once before the runs that start from it"},
                 "families": {"type": "object", "minProperties": 1, "additionalProperties": family,

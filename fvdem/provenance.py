@@ -11,7 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from . import __version__
+from .version import __version__
 
 
 @functools.lru_cache(maxsize=1)

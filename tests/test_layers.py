@@ -48,3 +48,106 @@ def test_the_bridge_talks_to_the_gas_through_its_interface_only():
     private = {"solver", "exchange_beta", "exchange_source", "returned_momentum"}
     used = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
     assert not used & private, sorted(used & private)
+
+
+# the layers, bottom up (docs/ARCHITECTURE.md): a module imports from its own package, the leaves and the
+# layers below its own, never from beside or above it
+LAYERS = [
+    {"errors", "correlations", "timing", "provenance", "signals", "version"},  # leaves
+    {"dem", "gas"},
+    {"coupling"},
+    {"case"},
+    {"analysis", "io"},
+    {"model", "scenes", "monitors"},
+    {"simulation"},
+    {"study"},
+    {"json_schema"},
+    {"cli"},
+    {"__main__", "__init__"},
+]
+RANK = {name: rank for rank, names in enumerate(LAYERS) for name in names}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _targets(path: Path, node) -> set:
+    """The fvdem modules an import statement names (``fvdem.x.y`` form; ``from p import m`` names
+    ``p.m`` when ``m`` is a module of package ``p``, else ``p``)."""
+    package = _module_name(path) if path.name == "__init__.py" else _module_name(path).rsplit(".", 1)[0]
+    if isinstance(node, ast.Import):
+        return {a.name for a in node.names if a.name.startswith("fvdem")}
+    if node.level == 0:
+        if not (node.module or "").startswith("fvdem"):
+            return set()
+        base = node.module
+    else:
+        parts = package.split(".")
+        base = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
+    found = set()
+    for alias in node.names:
+        candidate = f"{base}.{alias.name}"
+        as_path = PACKAGE.parent / candidate.replace(".", "/")
+        found.add(candidate if as_path.with_suffix(".py").exists() or (as_path / "__init__.py").exists() else base)
+    return found
+
+
+def _graph(module_level_only: bool) -> dict:
+    graph = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        tree = ast.parse(path.read_text())
+        nodes = tree.body if module_level_only else list(ast.walk(tree))
+        if module_level_only:  # also imports under if / try at module level (not in functions, not for typing)
+            nodes = [n for top in tree.body for n in ast.walk(top)
+                     if not isinstance(top, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+                     and not (isinstance(top, ast.If) and "TYPE_CHECKING" in ast.unparse(top.test))]
+        graph[_module_name(path)] = set().union(*(_targets(path, n) for n in nodes
+                                                  if isinstance(n, (ast.Import, ast.ImportFrom)))) - {_module_name(path)}
+    return graph
+
+
+def test_no_import_cycle_among_fvdem_modules():
+    """Module-level imports (those that run when a module is imported) form no cycle: a cycle makes
+    the import order matter and a name half-defined. Imports inside functions are not counted (they
+    run later, when everything is loaded)."""
+    graph = _graph(module_level_only=True)
+    state, stack, cycles = {}, [], []
+
+    def visit(module):
+        state[module] = "open"
+        stack.append(module)
+        for target in sorted(graph.get(module, ())):
+            if target not in graph:
+                continue
+            if state.get(target) == "open":
+                cycles.append(stack[stack.index(target):] + [target])
+            elif target not in state:
+                visit(target)
+        stack.pop()
+        state[module] = "done"
+
+    for module in sorted(graph):
+        if module not in state:
+            visit(module)
+    assert not cycles, "import cycles: " + "; ".join(" -> ".join(c) for c in cycles)
+
+
+def test_no_import_beside_or_above_a_modules_layer():
+    """Every import, module-level or inside a function, goes to the module's own package, a leaf or a
+    lower layer: dem and gas below coupling, coupling below case, case below analysis and io, those
+    below model and scenes, scenes below simulation, simulation below study, study below the command
+    line."""
+    wrong = []
+    for module, targets in _graph(module_level_only=False).items():
+        parts = module.split(".")
+        own = parts[1] if len(parts) > 1 else "__init__"
+        assert own in RANK, f"{module}: fvdem.{own} has no layer in LAYERS (add it)"
+        for target in targets:
+            other = target.split(".")[1] if "." in target else "__init__"
+            if other == own or RANK[other] == 0:
+                continue
+            if RANK[other] >= RANK[own]:
+                wrong.append(f"{module} imports {target} (layer {RANK[other]}, its own {RANK[own]})")
+    assert not wrong, "\n".join(sorted(wrong))

@@ -57,11 +57,12 @@ def test_simulation_holds_no_scene_specific_name():
 
 def test_report_draws_what_the_scene_declares(tmp_path):
     import fvdem
-    from fvdem.analysis.plots import plots_of, report
+    from fvdem.analysis.plots import report
+    from fvdem.scenes import plots_of
     out = tmp_path / "demo"
     fvdem.Simulation(case_of("demo"), out, threads=1).run()
     assert plots_of(out) == ("timeseries", "colours", "orientation", "gas_profile", "void_fraction", "mixing")
-    written = sorted(p.name for p in report(out))
+    written = sorted(p.name for p in report(out, plots_of(out)))
     # spheres: no orientation plot
     assert written == ["colours.png", "gas_profile.png", "mixing.png", "timeseries.png", "void_fraction.png"]
 

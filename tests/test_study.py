@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from fvdem.case import CaseError
-from fvdem.study import STOP_FILE, RunSpec, _priority, write_index, load_study, request_stop, run_task, select_runs
+from fvdem.study import STOP_FILE, RunSpec, write_index, load_study, request_stop, run_task, select_runs
+from fvdem.study.runner import _priority
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOKE = ROOT / "studies" / "smoke.toml"
@@ -733,7 +734,7 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     """A campaign cut short has every point of the study once: the first replicas' runs outrank all second
     replicas' (whatever their length), a second replica's own bed settles after the first replicas have
     started and before the runs that need it."""
-    from fvdem.study import _bed_priority
+    from fvdem.study.runner import _bed_priority
     study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
     assert len(study.runs) == 44 and {r.replica for r in study.runs} == {1, 2}
     first = [_priority(r) for r in study.runs if r.replica == 1]
@@ -747,7 +748,7 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
 
 
 def test_walltimes_and_durations_in_the_forms_the_schedulers_take():
-    from fvdem.study import _duration_seconds, walltime_seconds
+    from fvdem.study.cluster import _duration_seconds, walltime_seconds
     assert [walltime_seconds(t) for t in ("30", "30:15", "02:00:00", "1-00", "1-02:30", "1-02:30:05", " 01:00:00 ")] == [
         1800, 1815, 7200, 86400, 86400 + 9000, 86400 + 9005, 3600]
     assert walltime_seconds("2h") is None and walltime_seconds("") is None
@@ -763,7 +764,7 @@ def test_a_run_pauses_before_its_jobs_walltime_and_resumes_bit_for_bit(tmp_path,
 
     import numpy as np
 
-    import fvdem.study as study_module
+    import fvdem.study.tasks as study_tasks
     from fvdem.study import job_deadline, prepare_bed
     assert job_deadline({}) is None
     assert job_deadline({"FVDEM_JOB_END": "1000", "FVDEM_STOP_MARGIN": "60"}) == 940.0
@@ -775,7 +776,7 @@ def test_a_run_pauses_before_its_jobs_walltime_and_resumes_bit_for_bit(tmp_path,
     bed = prepare_bed(study.beds[0], 1)
     whole, cut = study.runs[0], replace(study.runs[0], folder=str(tmp_path / "out" / "runs" / "cut"))
     assert run_task(whole, 1, bed)["status"] == "finished"
-    monkeypatch.setattr(study_module, "PAUSED_RETURN_DELAY", 0.0)
+    monkeypatch.setattr(study_tasks, "PAUSED_RETURN_DELAY", 0.0)
     monkeypatch.setenv("FVDEM_STOP_MARGIN", "0")
     monkeypatch.setenv("FVDEM_JOB_END", str(time.time() - 1))  # a job at its end: not a step
     result = run_task(cut, 1, bed)
@@ -792,3 +793,37 @@ def test_a_run_pauses_before_its_jobs_walltime_and_resumes_bit_for_bit(tmp_path,
     with np.load(Path(whole.folder) / "final_state.npz") as a, np.load(Path(cut.folder) / "final_state.npz") as b:
         for key in a.files:
             np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+
+
+def test_a_study_names_its_report_and_an_unknown_report_is_refused(tmp_path):
+    text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+    path = tmp_path / "named.toml"
+    path.write_text('report = "table"\n' + text)
+    study = load_study(path, tmp_path / "out")
+    assert study.report == "table" and {r.report for r in study.runs} == {"table"}
+    assert load_study(SMOKE, tmp_path / "default").report == "mema2020"
+    path.write_text('report = "mema202"\n' + text)
+    with pytest.raises(CaseError) as refused:
+        load_study(path, tmp_path / "out")
+    assert "report = 'mema202': a registered report (did you mean 'mema2020'?): mema2020, table" in str(refused.value)
+
+
+def test_the_generic_report_writes_the_table_alone(tmp_path):
+    """The ``table`` report of the archived stage-1 runs: the generic columns, no figures, no findings; the
+    default report of the same runs adds seed 000's columns, figures and findings."""
+    from shutil import copytree
+
+    from fvdem.study import report
+    archived = ROOT / "docs" / "data" / "mema2020_stage1"
+    for name in ("table", "mema2020"):
+        folder = copytree(archived, tmp_path / name)
+        index = json.loads((folder / "study.json").read_text())
+        (folder / "study.json").write_text(json.dumps({**index, "report": name}))
+        written = {p.name for p in report(folder)}
+        rows = json.loads((folder / "table.json").read_text())
+        if name == "table":
+            assert written == {"table.csv", "table.json"}
+            assert set(rows[0]) == {"name", "family", "gas.u_over_umf", "status", "wall_seconds",
+                                    "simulated_seconds", "replica"}
+        else:
+            assert {"findings.json", "t95.png"} <= written and "t95" in rows[0] and "void_fraction_binarity" in rows[0]

@@ -288,23 +288,12 @@ PLOTS = {
 }
 
 
-def plots_of(out) -> tuple:
-    """The plots the run's scene declares (from its case.toml); without one, every plot."""
-    out = Path(out)
-    from ..case import CaseError, load_case
-    from ..scenes import scene_for
-    try:
-        return scene_for(load_case(out / "case.toml")).plots
-    except (CaseError, OSError):  # no case file, or one this version no longer reads
-        return tuple(PLOTS)
-
-
 def report(out, plots=None) -> list:
-    """The plots of a run folder (``plots``: names in ``PLOTS``; default: those its scene declares)
-    that its files support; returns the written paths."""
+    """The plots of a run folder (``plots``: names in ``PLOTS``; default: all of them) that its files
+    support; returns the written paths. Those its scene declares: ``fvdem.scenes.plots_of(out)``."""
     out = Path(out)
     paths = []
-    for name in plots or plots_of(out):
+    for name in plots or tuple(PLOTS):
         plot, available = PLOTS[name]
         if available(out):
             paths.append(plot(out))

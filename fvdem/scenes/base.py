@@ -110,3 +110,16 @@ def scene_for(case) -> Scene:
         if kind.applies(case):
             return kind.build(case)
     raise ValueError(f"no registered scene applies to case {case.name!r}; registered: {', '.join(SCENES)}")
+
+
+def plots_of(out) -> tuple:
+    """The plots (``fvdem.analysis.plots.PLOTS`` names) a run folder's scene declares, from its case.toml;
+    without a readable case, every plot."""
+    from pathlib import Path
+
+    from ..analysis.plots import PLOTS
+    from ..case import CaseError, load_case
+    try:
+        return scene_for(load_case(Path(out) / "case.toml")).plots
+    except (CaseError, OSError):  # no case file, or one this version no longer reads
+        return tuple(PLOTS)

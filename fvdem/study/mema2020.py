@@ -1,0 +1,329 @@
+"""Seed 000's study report (Mema et al. (2020), §5-§6), registered as ``"mema2020"``: mixing entropy
+against time per family (Fig. 2), t95 against U/Umf (Fig. 4), AR-1 against AR-4 MP (Fig. 3) with their
+void fractions below 0.3 m (Fig. 7), AR-4 MP drag only against drag + lift + torque (Fig. 9); the table's
+t95, pressure-drop, bed-height, entropy and binarity columns; and the paper's findings, each with
+fvdem's numbers and a verdict (``check_findings``)."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from ..case import CaseError, load_case
+from .reports import StudyReport, register_report
+
+
+def _bed_surface(series):
+    """The bed's height [m] as the table gives it: the mean over the second half of the time series of
+    ``bed_top`` (the height below which 99 % of the particle tops lie), None without it. The summary's
+    ``bed_height`` is a packed bed's (solid volume over area and core solids fraction): in a fluidized
+    bed it exceeds the column (1.37 m in the 1.05 m column for AR-1 at 2.9 Umf). ``series``: ``_series``'s
+    (None, or at least one row)."""
+    import numpy as np
+    if series is None or "bed_top" not in series:
+        return None
+    times = series["time"]
+    return float(np.mean(series["bed_top"][times >= 0.5 * times[-1]]))
+
+
+def _inlet_passes_umf(folder: Path) -> float | None:
+    """When [s] a run's inlet velocity reaches the Umf its ``u_over_umf`` refers to: ``inlet_ramp / u_over_umf``
+    for a linear ramp from 0 (0 for a full-speed start); None without a readable case or a U/Umf."""
+    try:
+        gas = load_case(folder / "case.toml").gas
+    except CaseError:
+        return None
+    if not gas.u_over_umf:
+        return None
+    return gas.inlet_ramp / gas.u_over_umf if gas.u_over_umf >= 1.0 else None
+
+
+def _pairs(runs, first, second) -> dict:
+    """``{axes values: (run of family first, run of family second)}`` where both ran at those values."""
+    by = {}
+    for r in runs:
+        by.setdefault(tuple(r.get("point", {}).values()), {})[r["family"]] = r
+    return {point: (fam[first], fam[second]) for point, fam in by.items() if first in fam and second in fam}
+
+
+def void_fraction_samples(folder, below=0.3):
+    """Cell void fractions of the cells whose centres are below ``below`` [m], over the second half of
+    a run's gas snapshots (the fluidized state, not the start-up), pooled; empty without snapshots."""
+    import meshio
+    import numpy as np
+    snapshots = sorted(Path(folder).glob("gas_*.vtu"))
+    values = []
+    for snapshot in snapshots[len(snapshots) // 2:] if len(snapshots) > 1 else []:
+        grid = meshio.read(snapshot)
+        centres = grid.points[grid.cells[0].data].mean(axis=1)
+        values.append(np.asarray(grid.cell_data["voidage"][0])[centres[:, 2] < below])
+    return np.concatenate(values) if values else np.zeros(0)
+
+
+VOID_FRACTION = "void_fraction.json"  # an archived run's void-fraction record (its gas snapshots are not kept)
+
+
+def void_fraction_record(folder, below=0.3) -> dict | None:
+    """A run's cell void fractions below ``below`` [m] over the second half of its gas snapshots, as a
+    20-bin density histogram on [0, 1], their binarity (``void_fraction_binarity``) and count; from the
+    snapshots, else from an archived run's ``void_fraction.json``; None without either."""
+    import numpy as np
+    from ..analysis.mixing import void_fraction_binarity
+    values = void_fraction_samples(folder, below)
+    if values.size:
+        counts, edges = np.histogram(values, bins=20, range=(0.0, 1.0), density=True)
+        binarity = void_fraction_binarity(values)
+        return {"below": below, "edges": edges.tolist(), "density": counts.tolist(), "cells": int(values.size),
+                "binarity": None if math.isnan(binarity) else binarity}
+    stored = Path(folder) / VOID_FRACTION
+    return json.loads(stored.read_text()) if stored.exists() else None
+
+
+def plot_void_fractions(runs, path, below=0.3):
+    """Histograms of the cell void fraction below ``below`` [m] over the second half of each run's gas
+    snapshots, on one chart, with each run's binarity (``void_fraction_binarity``; Mema et al. (2020) Fig. 7)."""
+    import numpy as np
+    from ..analysis.plots import _pyplot, _save
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(5.5, 3.8))
+    for r in runs:
+        record = void_fraction_record(r["folder"], below)
+        if record is not None:
+            edges = np.asarray(record["edges"])
+            binarity = "-" if record["binarity"] is None else f"{record['binarity']:.2f}"
+            ax.step(0.5 * (edges[1:] + edges[:-1]), record["density"], where="mid",
+                    label=f"{r['name']} (binarity {binarity})")
+    ax.set_xlabel("cell void fraction")
+    ax.set_ylabel("probability density")
+    ax.set_title(f"cells below z = {below} m, second half of the run")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, Path(path))
+
+
+# Mema et al.'s findings (§5-§6) that a study's t95 table can check; each rule sees the runs by family
+CLOSE = 0.10  # relative differences below this need replicas to be told from chaos
+
+
+TERMINAL = 0.25  # a terminal t95 within this of the paper's "about" value holds
+
+
+SETTINGS_TOLERANCE = 0.15  # t95 at the defaults within this of t95 at the paper's settings: no change
+
+
+def _compare_binarity(rows) -> dict:
+    """AR-1's void fractions below 0.3 m more binary than AR-4 MP's (Fig. 7), at every velocity both ran."""
+    claim = "AR-1 void fractions more binary than AR-4 (Fig. 7)"
+    by = {}
+    for r in rows:
+        if r["family"] in ("ar1", "ar4_mp") and r["status"] != "failed" and r.get("void_fraction_binarity") is not None:
+            by.setdefault(r.get("gas.u_over_umf"), {}).setdefault(r["family"], []).append(r["void_fraction_binarity"])
+    common = sorted(v for v, fam in by.items() if v is not None and len(fam) == 2)
+    if not common:
+        return {"finding": claim, "verdict": "open", "why": "no velocity where AR-1 and AR-4 MP both have gas snapshots"}
+    values, close = {}, []
+    for v in common:
+        a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
+        values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
+        if abs(a - b) < CLOSE * max(a, b) and min(len(by[v]["ar1"]), len(by[v]["ar4_mp"])) < 2:
+            close.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas")
+    rule = "binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run"
+    if close:
+        return {"finding": claim, "verdict": "open", "why": "; ".join(close) + " (too noisy to tell)", "values": values,
+                "rule": rule}
+    holds = all(x["ar1"] > x["ar4_mp"] for x in values.values())
+    return {"finding": claim, "verdict": "holds" if holds else "does not hold", "values": values, "rule": rule}
+
+
+def _defaults_against_paper_settings(rows) -> dict:
+    """The same point at fvdem's defaults (family ``ar1``) and at the paper's settings (``ar1_paper``):
+    t95 within ``SETTINGS_TOLERANCE``, and the bed's pressure drop over W/A beside it."""
+    claim = "fvdem's defaults do not change the mixing (AR-1 at the paper's own settings)"
+    a, b = _t95(rows, "ar1"), _t95(rows, "ar1_paper")
+    common = sorted(set(a) & set(b))
+    if not common:
+        return {"finding": claim, "verdict": "open", "why": "no velocity run both at the defaults and the paper's settings"}
+    drop = {r["family"]: r.get("pressure_drop_over_weight") for r in rows
+            if r["family"] in ("ar1", "ar1_paper") and r.get("gas.u_over_umf") in common}
+    values = {f"{v:g}": {"defaults": a[v], "paper": b[v]} for v in common}
+    values["pressure_drop_over_weight"] = drop
+    if any(None in a[v] or None in b[v] for v in common):
+        return {"finding": claim, "verdict": "open", "why": "not mixed by the run's end (too short)", "values": values}
+    gaps = {f"{v:g}": abs(sum(a[v]) / len(a[v]) - sum(b[v]) / len(b[v])) / (sum(b[v]) / len(b[v])) for v in common}
+    return {"finding": claim, "verdict": "holds" if max(gaps.values()) < SETTINGS_TOLERANCE else "does not hold",
+            "values": values, "gaps": gaps, "rule": f"t95 within {100 * SETTINGS_TOLERANCE:.0f} %"}
+
+
+def _by_velocity(rows, family, key):
+    """``{U/Umf: [row[key], ...]}`` of the runs of a family that did not fail (replicas together)."""
+    out = {}
+    for r in rows:
+        if r["family"] == family and r["status"] != "failed" and "gas.u_over_umf" in r:
+            out.setdefault(r["gas.u_over_umf"], []).append(r.get(key))
+    return out
+
+
+def _t95(rows, family):
+    """``{U/Umf: [t95 or None, ...]}`` of the runs of a family (replicas listed together)."""
+    return _by_velocity(rows, family, "t95")
+
+
+def _compare(rows, faster, slower, velocities, claim):
+    """``faster`` mixes sooner than ``slower`` at every velocity of ``velocities`` both ran."""
+    a, b = _t95(rows, faster), _t95(rows, slower)
+    common = sorted(v for v in set(a) & set(b) if velocities(v))
+    if not common:
+        return {"finding": claim, "verdict": "open", "why": f"no velocity where both {faster} and {slower} ran"}
+    values, why, faster_at = {}, [], {}
+    for v in common:
+        if None in a[v] or None in b[v]:
+            # an unmixed run's t95 lies beyond its end: a mixed run that mixed before the other's end
+            # decides the comparison; otherwise show the entropy both reached
+            ends = [[e or 0.0 for e in _by_velocity(rows, family, "simulated_seconds")[v]]
+                    for family in (faster, slower)]
+            ta = max(a[v]) if None not in a[v] else None
+            tb = max(b[v]) if None not in b[v] else None
+            if ta is not None and tb is None and ta < min(ends[1]):
+                values[f"{v:g}"] = {faster: ta, slower: f"> {min(ends[1]):g} (not mixed by its end)"}
+                faster_at[v] = True
+                continue
+            if tb is not None and ta is None and tb < min(ends[0]):
+                values[f"{v:g}"] = {faster: f"> {min(ends[0]):g} (not mixed by its end)", slower: tb}
+                return {"finding": claim, "verdict": "does not hold", "values": values,
+                        "rule": "a run not mixed by its end mixes later than a run mixed before that time"}
+            values[f"{v:g}"] = {"mixing_entropy_at_end": {family: _by_velocity(rows, family, "final_mixing_entropy")[v]
+                                                          for family in (faster, slower)},
+                                "end_time": {faster: ends[0], slower: ends[1]}}
+            return {"finding": claim, "verdict": "open", "why": f"not mixed by the run's end at {v:g} Umf (too short)",
+                    "values": values}
+        ta, tb = sum(a[v]) / len(a[v]), sum(b[v]) / len(b[v])
+        values[f"{v:g}"] = {faster: ta, slower: tb}
+        faster_at[v] = ta < tb
+        if abs(ta - tb) < CLOSE * max(ta, tb) and min(len(a[v]), len(b[v])) < 2:
+            why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas")
+    if why:
+        return {"finding": claim, "verdict": "open", "why": "; ".join(why) + " (too noisy to tell)", "values": values}
+    holds = all(faster_at.values())
+    return {"finding": claim, "verdict": "holds" if holds else "does not hold", "values": values}
+
+
+def check_findings(rows) -> list:
+    """Each finding of Mema et al. (2020) (§5-§6), with fvdem's numbers and one word: holds, does not hold, or
+    open (and why: runs missing, too short to mix, or differences within the noise without replicas).
+    From the t95 table: AR-4 against AR-1 up to 2 Umf, lift and torque, SP against MP, the terminal t95
+    and its change above 2.3 Umf; from the gas snapshots: AR-1's void fractions more binary than AR-4's
+    (``void_fraction_binarity``, Fig. 7); and whether fvdem's defaults change the mixing (a family
+    ``ar1_paper`` at the paper's settings beside ``ar1``)."""
+    findings = [
+        _compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
+        _compare(rows, "ar4_mp", "ar4_mp_drag", lambda v: True, "lift and torque shorten AR-4 mixing"),
+    ]
+    sp, mp = _t95(rows, "ar4_sp"), _t95(rows, "ar4_mp")
+    common = [v for v in sorted(set(sp) & set(mp)) if None not in sp[v] + mp[v]]
+    claim = "single- against multi-particle closures: only a slight effect on AR-4 mixing"
+    if not common:
+        findings.append({"finding": claim, "verdict": "open", "why": "no velocity where SP and MP both mixed"})
+    else:
+        gaps = {f"{v:g}": abs(sum(sp[v]) / len(sp[v]) - sum(mp[v]) / len(mp[v])) / (sum(mp[v]) / len(mp[v]))
+                for v in common}
+        findings.append({"finding": claim, "verdict": "holds" if max(gaps.values()) < 0.2 else "does not hold",
+                         "values": gaps, "rule": "t95 within 20 %"})
+    for family, paper in (("ar1", 2.6), ("ar4_mp", 2.3)):
+        t = _t95(rows, family)
+        high = sorted(v for v in t if v >= 2.3)
+        claim = f"terminal t95 of {family} about {paper} s (paper)"
+        mixed = [v for v in high if None not in t[v]]
+        if not high:
+            findings.append({"finding": claim, "verdict": "open", "why": "no velocity at or above 2.3 Umf"})
+        elif not mixed:
+            findings.append({"finding": claim, "verdict": "open", "why": "not mixed by the run's end (too short)"})
+        else:
+            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
+            terminal = sum(means.values()) / len(means)
+            findings.append({"finding": claim, "verdict": "holds" if abs(terminal / paper - 1) < TERMINAL else "does not hold",
+                             "values": means, "rule": f"mean t95 at or above 2.3 Umf within {100 * TERMINAL:.0f} % of the paper"})
+        claim = f"{family}: little change of t95 above about 2.3 Umf"
+        if len(mixed) < 2:
+            findings.append({"finding": claim, "verdict": "open",
+                             "why": "fewer than two mixed velocities at or above 2.3 Umf"})
+        else:
+            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
+            spread = (max(means.values()) - min(means.values())) / max(means.values())
+            findings.append({"finding": claim, "verdict": "holds" if spread < 0.2 else "does not hold",
+                             "values": means, "rule": "spread below 20 %"})
+    findings.append(_compare_binarity(rows))
+    findings.append(_defaults_against_paper_settings(rows))
+    return findings
+
+
+def _live(series) -> dict:
+    """A run in progress from its time series: t95 (None if not yet mixed), and the bed pressure drop over
+    W/A and its fluctuation over the second half of what it holds."""
+    import numpy as np
+    from ..analysis.mixing import mixing_time
+    times = series["time"]
+    out = {"t95": mixing_time(times, series["mixing_entropy"]) if "mixing_entropy" in series else None}
+    if "pressure_drop_over_weight" in series and len(times) > 1:
+        half = series["pressure_drop_over_weight"][times >= 0.5 * times[-1]]
+        out["pressure_drop_over_weight"] = float(np.mean(half))
+        out["pressure_drop_std_over_weight"] = float(np.std(half))
+    return out
+
+
+def _figures(out: Path, runs: list) -> list:
+    """Mixing entropy per family (Fig. 2), t95 against U/Umf (Fig. 4), and at each velocity both families
+    ran: AR-1 against AR-4 MP (Fig. 3) with their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only
+    against drag + lift + torque (Fig. 9)."""
+    from ..analysis.plots import plot_mixing, plot_t95
+    paths = []
+    for family in sorted({r["family"] for r in runs}):
+        paths.append(plot_mixing([Path(r["folder"]) for r in runs if r["family"] == family],
+                                 out / f"mixing_{family}.png"))
+    if runs:
+        paths.append(plot_t95([Path(r["folder"]) for r in runs], out / "t95.png", names=[r["family"] for r in runs]))
+    for figure, (first, second) in (("fig3", ("ar1", "ar4_mp")), ("fig9", ("ar4_mp_drag", "ar4_mp"))):
+        for point, pair in sorted(_pairs(runs, first, second).items()):
+            tag = "_".join(f"{v:g}" for v in point)
+            paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{tag}.png"))
+            if figure == "fig3":
+                paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{tag}.png"))
+    return paths
+
+
+def _columns(r: dict, folder: Path, data: dict, series) -> dict:
+    """t95 and t95 counted from when the inlet passes Umf, the bed's pressure drop over W/A and its
+    fluctuation, the bed height, the mixing entropy at the end and the void fractions' binarity."""
+    record = void_fraction_record(folder) if r["status"] != "failed" else None
+    passes = _inlet_passes_umf(folder)
+    t95 = r.get("t95")
+    return {"t95": t95, "inlet_passes_umf": passes,
+            "t95_from_inlet_at_umf": None if t95 is None or passes is None else t95 - passes,
+            "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
+            "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
+                                              if "bed_pressure_drop_std_second_half" in data
+                                              else data.get("pressure_drop_std_over_weight")),
+            "bed_height": _bed_surface(series),
+            "final_mixing_entropy": (float(series["mixing_entropy"][-1])
+                                     if series is not None and "mixing_entropy" in series else None),
+            "void_fraction_binarity": None if record is None else record["binarity"]}
+
+
+def _archive_void_fractions(folder: Path, target: Path) -> None:
+    record = void_fraction_record(folder)
+    if record is not None:
+        (target / VOID_FRACTION).write_text(json.dumps(record) + "\n")
+
+
+def _headline(result: dict) -> str:
+    return f"t95 {result['t95']:.3g} s" if result.get("t95") is not None else "t95 -"
+
+
+register_report(StudyReport(
+    "mema2020", "seed 000 (Mema et al., 2020): mixing and t95 figures, pressure drop, binarity, the paper's findings",
+    run_values=lambda summary: {"t95": summary.get("t95")}, headline=_headline, live=_live, columns=_columns,
+    figures=_figures, findings=check_findings,
+    archived_columns=("mixing_entropy", "lacey_index", "pressure_drop_over_weight", "bed_pressure_drop", "bed_top",
+                      "rms_speed", "max_overlap_over_diameter"),
+    archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",
+                      "bed_height", "mixing_cells"),
+    archive_extra=_archive_void_fractions))

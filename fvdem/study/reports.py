@@ -1,0 +1,175 @@
+"""A study's results: reports registered by name, the table, figures and findings they make from the run
+folders (``report``), and the compact archive of a study folder (``archive``).
+
+The runner and the tasks know nothing of what a run measures; a report does. It says which values of a
+run's summary ``study.json`` keeps (``run_values``: seed 000's report keeps t95), the detail of a finished
+run's progress line (``headline``), what a run still in progress holds (``live``: from its time series),
+its table columns, its figures and its findings (``findings.json``), and what an archive keeps beyond the
+generic (time-series columns, summary keys, files). A study file names its report (``report = "..."``,
+``fvdem schema --registered`` lists them); ``"table"`` is the generic one, ``"mema2020"`` (seed 000's
+mixing figures and findings, ``fvdem.study.mema2020``) the default. Adding one: docs/ARCHITECTURE.md,
+"Add a study figure or finding".
+"""
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .tasks import _simulated_so_far
+
+
+@dataclass(frozen=True)
+class StudyReport:
+    """What a study's report makes of its runs (each hook optional: ``None`` leaves the generic part alone)."""
+
+    name: str
+    summary: str
+    run_values: Callable[[dict], dict] | None = None  # summary.json -> values study.json keeps per run
+    headline: Callable[[dict], str] | None = None  # a finished run's result -> its progress-line detail
+    live: Callable[[dict], dict] | None = None  # time series of a run in progress -> summary-like values
+    columns: Callable[[dict, Path, dict, dict | None], dict] | None = None  # (run, folder, data, series) -> columns
+    figures: Callable[[Path, list], list] | None = None  # (study folder, runs with a time series) -> PNG paths
+    findings: Callable[[list], list] | None = None  # table rows -> findings.json
+    archived_columns: tuple = ()  # time-series columns an archive keeps besides ``time``
+    archived_summary: tuple = ()  # summary keys an archive keeps besides ``ARCHIVED_SUMMARY``
+    archive_extra: Callable[[Path, Path], None] | None = None  # (run folder, its archive folder): extra files
+
+
+REPORTS: dict[str, StudyReport] = {}
+DEFAULT_REPORT = "mema2020"
+REPORT_MODULES = ("mema2020",)  # modules of this package that register reports, imported on first use
+
+
+def register_report(report: StudyReport) -> StudyReport:
+    """Make ``report`` available to study files (``report = "<name>"``)."""
+    REPORTS[report.name] = report
+    return report
+
+
+def report_for(name: str | None) -> StudyReport:
+    """The registered report ``name`` (the default for None); ``report_for(None)`` also fills ``REPORTS``."""
+    if DEFAULT_REPORT not in REPORTS:
+        import importlib
+        for module in REPORT_MODULES:
+            importlib.import_module(f"{__package__}.{module}")
+    return REPORTS[name or DEFAULT_REPORT]
+
+
+register_report(StudyReport("table", "the generic table: status, simulated and wall seconds, replica of each run"))
+
+
+# --------------------------------------------------------------------------- the report of a study folder
+def _series(folder: Path):
+    """A run's time series (``read_timeseries``), or None while it has none or only its header."""
+    from ..analysis.plots import read_timeseries
+    if not (folder / "timeseries.csv").exists():
+        return None
+    try:
+        series = read_timeseries(folder)
+    except (IndexError, ValueError):  # a run that has written its header only
+        return None
+    return series if len(series.get("time", ())) else None
+
+
+def _so_far(series, chosen: StudyReport) -> dict:
+    """A run in progress from its time series: the simulated seconds it holds and its report's ``live``
+    values."""
+    times = series["time"]
+    return {"simulated_time": float(times[-1]) if len(times) else 0.0,
+            **(chosen.live(series) if chosen.live else {})}
+
+
+def report(out) -> list:
+    """The study's table (``table.csv`` / ``table.json``: per run its status, axes values, replica,
+    simulated and wall seconds, and its report's columns), its report's figures and ``findings.json``,
+    from its run folders (or an archive's, ``fvdem study DIR --archive DEST``). Returns the files written."""
+    out = Path(out)
+    result = json.loads((out / "study.json").read_text())
+    chosen = report_for(result.get("report"))
+    for r in result["runs"]:  # an archive's folders are relative to it
+        r["folder"] = str(out / r["folder"]) if not Path(r["folder"]).is_absolute() else r["folder"]
+    runs = [r for r in result["runs"] if r["status"] != "failed" and (Path(r["folder"]) / "timeseries.csv").exists()]
+    paths = list(chosen.figures(out, runs)) if chosen.figures else []
+    rows = []
+    for r in result["runs"]:
+        summary = Path(r["folder"]) / "summary.json"
+        data = json.loads(summary.read_text()) if summary.exists() else {}
+        series = _series(Path(r["folder"]))
+        if (not data or data.get("stopped_early")) and series is not None:
+            # a run in progress: what its time series holds (the summary of an earlier stop is stale)
+            data = _so_far(series, chosen)
+            r = {**r, **(chosen.run_values(data) if chosen.run_values else {})}
+        row = {"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"]}
+        if chosen.columns:
+            row.update(chosen.columns(r, Path(r["folder"]), data, series))
+        row.update({"wall_seconds": data.get("wall_seconds"), "simulated_seconds": data.get("simulated_time"),
+                    "replica": r.get("replica") or int((re.search(r"_r(\d+)$", r["name"]) or [0, 1])[1])})
+        rows.append(row)
+    (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
+    columns = list(dict.fromkeys(k for row in rows for k in row))
+    lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
+    (out / "table.csv").write_text("\n".join(lines) + "\n")
+    written = paths + [out / "table.csv", out / "table.json"]
+    if chosen.findings:
+        (out / "findings.json").write_text(json.dumps(chosen.findings(rows), indent=1) + "\n")
+        written.append(out / "findings.json")
+    return written
+
+
+# --------------------------------------------------------------------------- archive (compact results)
+ARCHIVED_SUMMARY = ("case", "simulated_time", "steps", "settled", "stopped_early", "threads", "wall_seconds",
+                    "cpu_seconds", "timings", "provenance", "peak_memory_mb")
+
+
+def archive(out, dest) -> list:
+    """The compact results of a study folder's runs in ``dest`` (small enough to commit, e.g. under
+    ``docs/data/``): per run its ``case.toml``, its time series thinned to ``time`` and its report's
+    ``archived_columns`` (6 significant digits), its summary's ``ARCHIVED_SUMMARY`` and report keys, its
+    report's extra files (seed 000's: the void-fraction record) and its ``run.log``; plus the study's
+    ``study.json`` (folders relative to ``dest``) and ``study.toml``, and the report made from them. No
+    checkpoints, states or VTU files. ``fvdem study DEST --report`` rebuilds the report and findings from
+    ``dest`` alone. A run already in ``dest`` is replaced only by one that holds more simulated time.
+    Returns the files written."""
+    out, dest = Path(out), Path(dest)
+    index = json.loads((out / "study.json").read_text())
+    chosen = report_for(index.get("report"))
+    dest.mkdir(parents=True, exist_ok=True)
+    kept = json.loads((dest / "study.json").read_text()) if (dest / "study.json").exists() else {"runs": []}
+    runs = {r["name"]: r for r in kept["runs"]}
+    written = []
+    for r in index["runs"]:
+        folder = Path(r["folder"])
+        series = _series(folder)
+        if series is None:
+            continue
+        target = dest / "runs" / r["name"]
+        held = _simulated_so_far(target, live=True) if target.exists() else -1.0
+        if float(series["time"][-1]) <= held:
+            continue  # what the archive holds is as far along (a later invocation lost nothing)
+        target.mkdir(parents=True, exist_ok=True)
+        columns = [c for c in ("time", *chosen.archived_columns) if c in series]
+        rows = zip(*(series[c] for c in columns))
+        (target / "timeseries.csv").write_text(",".join(columns) + "\n" + "".join(
+            ",".join(f"{v:.6g}" for v in row) + "\n" for row in rows))
+        if (folder / "summary.json").exists():
+            summary = json.loads((folder / "summary.json").read_text())
+            summary = {k: summary[k] for k in (*ARCHIVED_SUMMARY, *chosen.archived_summary) if k in summary}
+            if summary.get("stopped_early"):
+                summary.update(_so_far(series, chosen))
+            (target / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+        for name in ("case.toml", "run.log"):
+            if (folder / name).exists():
+                (target / name).write_text((folder / name).read_text())
+        if chosen.archive_extra:
+            chosen.archive_extra(folder, target)
+        runs[r["name"]] = {**r, "folder": f"runs/{r['name']}", "simulated_seconds": float(series["time"][-1])}
+        written.append(target)
+    (dest / "study.json").write_text(json.dumps({**{k: v for k, v in index.items() if k != "runs"},
+                                                 "archived_from": str(out), "runs": list(runs.values())}, indent=1)
+                                     + "\n")
+    if (out / "study.toml").exists():
+        (dest / "study.toml").write_text((out / "study.toml").read_text())
+    return written + report(dest)

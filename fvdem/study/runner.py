@@ -1,0 +1,316 @@
+"""The Dask runner: a study's beds and runs as tasks (first replicas first, longest first), their
+progress, stop requests, walltime pauses and resubmissions, and ``study.json``; ``map_tasks`` for the
+sweeps that are not studies of case files. Nothing here knows what a run measures: the study's report
+(``reports``) gives each finished run's progress detail."""
+from __future__ import annotations
+
+import json
+import math
+import signal
+import sys
+import time
+from pathlib import Path
+
+from ..case import CaseError, load_case
+from .cluster import close_client, make_client
+from .reports import report_for
+from .sweep import BedSpec, RunSpec, Study
+from .tasks import STOP_FILE, StudyStopped, _simulated_so_far, prepare_bed, run_task
+
+
+MAX_STALLS = 3  # paused attempts in a row that started and made no progress: the walltime is too short
+
+
+def progress_line(done: int, total: int, name: str, status: str, detail: str, started: float,
+                  work_done: float | None = None, work_total: float | None = None, unit: str = "") -> str:
+    """One line of a sweep's progress view: tasks done, the work done (e.g. simulated seconds) and an ETA
+    from the rate so far."""
+    elapsed = time.perf_counter() - started
+    done_work, total_work = (done, total) if work_done is None else (work_done, work_total)
+    eta = elapsed / done_work * (total_work - done_work) if done_work else math.nan
+    work = f"{done_work:.4g} of {total_work:.4g}{unit} done, " if work_done is not None else ""
+    return (f"[{done}/{total}] {name}: {status}" + (f" ({detail})" if detail else "")
+            + f"; {work}{elapsed:.0f} s wall, ETA {eta:.0f} s")
+
+
+def _guarded(function, item, threads):
+    """A sweep task: ``function(item, threads)``, its failure returned with the cause instead of raised."""
+    started = time.perf_counter()
+    try:
+        value = function(item, threads)
+    except Exception as exc:  # noqa: BLE001  (one failed point is reported, the others go on)
+        return {"status": "failed", "error": f"{type(exc).__name__}: {exc}", "value": None,
+                "wall_seconds": time.perf_counter() - started}
+    return {"status": "finished", "error": None, "value": value, "wall_seconds": time.perf_counter() - started}
+
+
+def map_tasks(function, items, names, *, threads=1, scheduler=None, workers=None, cluster=None, log=print) -> list:
+    """The engine under every sweep that is not a study of case files (the tools' fractions, variants
+    and ramps): ``function(item, threads)`` for each item, each a task on the same Dask clients as
+    ``fvdem study`` (``scheduler``, a dask-jobqueue ``cluster`` table, or a LocalCluster of ``workers``),
+    one progress line per finished task. Returns, in the items' order, ``{"name", "status"
+    ("finished" or "failed"), "value", "error", "wall_seconds"}``: a failure does not stop the others.
+    ``function`` must be importable or picklable (a tool's module-level function is)."""
+    from distributed import as_completed
+    names = [str(n) for n in names]
+    if len(set(names)) != len(names):
+        raise ValueError("map_tasks: task names must be distinct")
+    started = time.perf_counter()
+    client, description = make_client(cluster, scheduler, workers, threads)
+    log(f"{len(names)} tasks on {description}")
+    results = {}
+    try:
+        futures = {client.submit(_guarded, function, item, threads, key=f"task-{name}", pure=False): name
+                   for item, name in zip(items, names)}
+        for done, future in enumerate(as_completed(list(futures)), 1):
+            name = futures[future]
+            result = dict(future.result(), name=name)
+            results[name] = result
+            log(progress_line(done, len(names), name, result["status"], result["error"] or "", started))
+    finally:
+        close_client(client)
+    return [results[name] for name in names]
+
+
+def request_stop(out) -> Path:
+    """Ask the study running in ``out`` to stop: its runs checkpoint and end, queued runs do not start."""
+    path = Path(out) / STOP_FILE
+    path.write_text("stop requested\n")
+    return path
+
+
+# a replica's rank in the queue: every first replica before any second one, and so on (far more than a
+# run's DEM steps, 2e7 for 20 s at 1e-6 s); the beds come before the runs of their replica
+REPLICA_RANK = 10**10
+
+
+BED_RANK = 10**12
+
+
+def _priority(run: RunSpec) -> int:
+    """First replicas first, then longest first: DEM steps left (duration minus what the folder holds,
+    over the DEM step), less ``REPLICA_RANK`` per replica after the first. A campaign cut short has every
+    point of the study once before it has any twice."""
+    rank = -(run.replica - 1) * REPLICA_RANK
+    try:
+        dem_step = float(load_case(run.case, dict(run.overrides)).time.dem_step)
+    except CaseError:
+        return rank
+    left = max(0.0, run.duration - _simulated_so_far(Path(run.folder)))
+    return rank + int(round(left / dem_step))
+
+
+def _bed_priority(bed: BedSpec) -> int:
+    """A bed settles before the runs of its replica (``_priority``) but after those of the replica before:
+    the first replicas' beds before everything, the own beds of second replicas once every first replica
+    has started."""
+    return BED_RANK if bed.replica == 1 else -(bed.replica - 1) * REPLICA_RANK + REPLICA_RANK // 2
+
+
+class _StudyProgress:
+    """The study's progress view: simulated seconds done over all runs (read from the run folders every
+    ``poll`` seconds), runs done and the time left, as a tqdm bar on a terminal or a line every 2 % in a
+    log (``fvdem.io.progress``); per-run lines go above it."""
+
+    def __init__(self, study: Study, started: float, log):
+        from ..io.progress import progress_bar
+        self.study, self.log = study, log
+        self.total = sum(r.duration for r in study.runs)
+        self.bar = progress_bar(self.total, self._simulated(), f"study {study.name} (simulated s)")
+        if hasattr(self.bar, "step"):
+            self.bar.step = 2.0
+        self.is_tqdm = not hasattr(self.bar, "step")
+
+    def _simulated(self) -> float:
+        return sum(min(r.duration, _simulated_so_far(Path(r.folder), live=True)) for r in self.study.runs)
+
+    def update(self, runs_done: int) -> None:
+        now = self._simulated()
+        self.bar.set_postfix_str(f"{runs_done}/{len(self.study.runs)} runs done", refresh=False)
+        if now > self.bar.n:
+            self.bar.update(now - self.bar.n)
+
+    def message(self, line: str) -> None:
+        if self.is_tqdm:
+            self.bar.write(line, file=sys.stderr)
+        else:
+            self.log(line)
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+def _retire(client, address: str, seconds: float = 10.0) -> bool:
+    """Retire and close the worker at ``address`` (its job is at its walltime); tried again for up to
+    ``seconds`` while Dask declines because a key released just before (the paused run's, its bed's) still
+    lives only there. Returns whether it left; if it did not, ``PAUSED_RETURN_DELAY`` paces the run's
+    returns to it until its lifetime ends it."""
+    deadline = time.time() + seconds
+    while True:
+        try:
+            if address in client.retire_workers(workers=[address], close_workers=True):
+                return True
+            if address not in client.scheduler_info().get("workers", {}):
+                return True
+        except Exception:  # noqa: BLE001  (already gone: its job ended)
+            return True
+        if time.time() >= deadline:
+            return False
+        time.sleep(0.25)
+
+
+def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print, poll: float = 30.0) -> dict:
+    """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``).
+    SIGINT/SIGTERM (main thread) or ``request_stop(out)`` stop it with every running run checkpointed.
+    Progress: the run folders are read every ``poll`` seconds (``_StudyProgress``)."""
+    from distributed import wait
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "study.toml").write_text(Path(study.path).read_text())
+    (out / STOP_FILE).unlink(missing_ok=True)  # a stop request belongs to the invocation it stopped
+    stop_requested = []
+
+    def on_signal(signum, _frame):
+        if not stop_requested:
+            log(f"stopping (signal {signum}): each running run checkpoints at its next chunk; the same command "
+                "continues the study")
+        stop_requested.append(signum)
+        request_stop(out)
+
+    handlers = {}
+    try:
+        handlers = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:  # not the main thread: request_stop(out) still stops the study
+        pass
+    started = time.perf_counter()
+    client, description = make_client(study.cluster, scheduler, workers, threads)
+    log(f"{description}; Dask dashboard at {getattr(client, 'dashboard_link', None) or 'none'}")
+    tag = task_tag(study, out)
+    chosen = report_for(study.report)
+    try:
+        beds = {b.name: client.submit(prepare_bed, b, threads, key=f"{tag}bed-{b.name}", pure=False,
+                                      priority=_bed_priority(b)) for b in study.beds}
+
+        def submit(run, key):
+            return client.submit(run_task, run, threads, beds.get(run.bed) if run.bed else None, key=key, pure=False,
+                                 priority=_priority(run))
+
+        run_of, pending = {}, set()  # the futures live in ``pending`` only (a finished one is let go)
+        for run in study.runs:
+            future = submit(run, f"{tag}run-{run.name}")
+            run_of[future.key] = run
+            pending.add(future)
+        attempts = {r.name: 1 for r in study.runs}
+        stalls: dict[str, tuple] = {}  # run -> (paused attempts in a row without progress, time reached)
+
+        def resubmit(run, result, future):
+            """A run paused before its job's walltime goes back into the queue under a new key, however many
+            jobs it takes; None after ``MAX_STALLS`` started attempts in a row without progress (or when
+            the study is stopping)."""
+            count, reached = stalls.get(run.name, (0, -1.0))
+            if result.get("started", True):
+                count = count + 1 if result["simulated_seconds"] <= reached else 0
+            stalls[run.name] = (count, max(reached, result["simulated_seconds"]))
+            if result.get("worker"):
+                # the job is at its end: its worker takes no further run (retired before the resubmission,
+                # or the scheduler could hand the run straight back to it), and adaptive scaling starts a
+                # fresh job. Dask retires a worker only when no key lives on it alone, so the paused run's
+                # result and its bed's state (now passed by value) are released first.
+                if run.bed and not isinstance(beds[run.bed], str):
+                    beds[run.bed] = beds[run.bed].result()
+                client.cancel([future])
+                _retire(client, result["worker"])
+            if count >= MAX_STALLS or (out / STOP_FILE).exists():
+                return None
+            attempts[run.name] += 1
+            bar.message(f"{run.name}: paused at t = {result['simulated_seconds']:.4g} s before its job's walltime; "
+                        f"resubmitted (attempt {attempts[run.name]})")
+            retry = submit(run, f"{tag}run-{run.name}-{attempts[run.name]}")
+            run_of[retry.key] = run
+            return retry
+
+        total = sum(r.duration for r in study.runs)
+        results, done = [], 0.0
+        write_index(out, study, description=description)
+        bar = _StudyProgress(study, started, log)
+        while pending:
+            try:
+                finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
+            except TimeoutError:  # Dask's wait raises when nothing finished within the poll: show progress
+                finished = set()
+            for future in finished:
+                try:
+                    result = future.result()
+                except Exception as exc:  # noqa: BLE001  (a bed failed or was stopped: its runs cannot start)
+                    run = run_of[future.key]
+                    name = run.name
+                    stopped = isinstance(exc, StudyStopped) or (out / STOP_FILE).exists()
+                    result = {"name": name, "family": run.family, "status": "stopped" if stopped else "failed",
+                              "folder": run.folder, "simulated_seconds": 0.0, "point": run.point,
+                              **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
+                if result["status"] == "paused":
+                    retry = resubmit(run_of[future.key], result, future)
+                    if retry is not None:
+                        pending.add(retry)
+                        write_index(out, study, [*results, result], description)
+                        continue
+                    result = {**result, "status": "failed", "error": (
+                        f"paused {MAX_STALLS} times in a row at t = {result['simulated_seconds']:.6g} s without "
+                        "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
+                        "it; raise the cluster's walltime or lower stop_before_walltime")}
+                results.append(result)
+                done += result.get("simulated_seconds", 0.0) if result["status"] != "failed" else 0.0
+                detail = result.get("error") or (chosen.headline(result) if chosen.headline else "")
+                bar.message(progress_line(len(results), len(study.runs), result["name"], result["status"], detail,
+                                          started, done, total, " simulated s"))
+                write_index(out, study, results, description)
+            bar.update(len(results))
+        bar.close()
+    finally:
+        close_client(client)
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
+    index = write_index(out, study, results, description)
+    summary = {"study": study.name, "report": study.report, "scheduler": description, "runs": index["runs"],
+               "wall_seconds": time.perf_counter() - started}
+    if (out / STOP_FILE).exists():
+        summary["stopped"] = True
+    (out / "study.json").write_text(json.dumps(summary, indent=1) + "\n")
+    return summary
+
+
+def task_tag(study: Study, out) -> str:
+    """The prefix of a study's Dask task keys: its name and a digest of its folder, so that two studies
+    (or one study in two folders) on one shared scheduler never share a task (Dask keeps the first task
+    of a key and hands its result to the second: another study's bed, settled at other settings)."""
+    import hashlib
+    digest = hashlib.sha1(str(Path(out).resolve()).encode()).hexdigest()[:10]
+    return f"{study.name}-{digest}-"
+
+
+def _pending(run: RunSpec) -> dict:
+    return {"name": run.name, "family": run.family, "status": "pending", "folder": run.folder, "point": run.point,
+            "simulated_seconds": _simulated_so_far(Path(run.folder))}
+
+
+def write_index(out, study: Study, results=(), description: str | None = None) -> dict:
+    """``study.json``: every run of ``study`` with its latest result (``results``, else the one on
+    record, else ``pending`` with the simulated seconds its folder holds), so that ``--report`` works
+    while a study runs. Returns the index written."""
+    out = Path(out)
+    path = out / "study.json"
+    record = {}
+    if path.exists():
+        try:
+            record = json.loads(path.read_text())
+        except (OSError, json.JSONDecodeError):
+            record = {}
+    latest = {r["name"]: r for r in record.get("runs", [])}
+    latest.update({r["name"]: r for r in results})
+    names = [r.name for r in study.runs]
+    runs = ([{**(latest.get(r.name) or _pending(r)), "replica": r.replica} for r in study.runs]
+            + [r for n, r in latest.items() if n not in names])
+    index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "report": study.report,
+             **({"scheduler": description} if description else {}), "runs": runs}
+    path.write_text(json.dumps(index, indent=1) + "\n")
+    return index

@@ -1,0 +1,247 @@
+"""The sweep: a study file read and checked into its beds and runs (``Study``, ``RunSpec``, ``BedSpec``),
+every case checked before anything runs."""
+from __future__ import annotations
+
+import itertools
+import re
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ..case import CaseError, load_case
+from .checks import _did_you_mean, _problem, _table, read_toml
+from .cluster import check_cluster
+from .reports import DEFAULT_REPORT, REPORTS, report_for
+
+
+STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
+              "cluster", "report"}
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a study: where its case is, what it changes, and where it writes."""
+
+    name: str
+    family: str
+    case: str  # path of the base case file
+    overrides: dict
+    folder: str
+    bed: str | None = None  # name of the bed it starts from
+    point: dict = field(default_factory=dict)  # the axes' values of this run
+    duration: float = 0.0  # simulated seconds (the study's, or its family's own)
+    replica: int = 1  # 1, 2, ...: replica k >= 2 starts from its own bed (insertion seed + k - 1)
+    report: str = DEFAULT_REPORT  # the study's report: which values of its summary the run's result carries
+
+
+@dataclass(frozen=True)
+class BedSpec:
+    name: str
+    case: str
+    overrides: dict
+    folder: str
+    replica: int = 1  # the replica whose runs start from it (``_bed_priority``)
+
+
+@dataclass(frozen=True)
+class Study:
+    name: str
+    path: str
+    duration: float
+    beds: tuple
+    runs: tuple
+    cluster: dict
+    report: str = DEFAULT_REPORT  # a registered report (``fvdem.study.reports``): the study's table, figures, findings
+
+
+def load_study(path, out) -> Study:
+    """Read and check a study file; ``CaseError`` with every problem (key path, value, what is allowed)."""
+    return study_from_table(read_toml(path), Path(path), out)
+
+
+def study_from_table(table: dict, path, out) -> Study:
+    """A study from its parsed file (``path``: where it is, for relative case paths and its name);
+    ``CaseError`` with every problem."""
+    path = Path(path)
+    problems: list[str] = []
+    for key in sorted(set(table) - STUDY_KEYS):
+        _problem(problems, key, table[key], f"unknown key{_did_you_mean(key, STUDY_KEYS)}; a study has "
+                 f"{', '.join(sorted(STUDY_KEYS))}")
+    for key in ("name", "description"):
+        if key in table and not isinstance(table[key], str):
+            _problem(problems, key, table[key], "a string")
+    name = table.get("name", path.stem)
+    report_for(None)  # the registered reports (seed 000's registers itself on first use)
+    report = table.get("report", DEFAULT_REPORT)
+    if not isinstance(report, str) or report not in REPORTS:
+        _problem(problems, "report", report, f"a registered report{_did_you_mean(report, REPORTS)}: "
+                 f"{', '.join(sorted(REPORTS))}")
+        report = DEFAULT_REPORT
+    duration = table.get("duration")
+    if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not 0 < duration < 1e6:
+        _problem(problems, "duration", duration, "a number of simulated seconds > 0")
+    replicas = _replicas(table, "replicas", 1, problems)
+    settings = _table(table, "settings", problems)
+    axes = _table(table, "axes", problems)
+    for key, values in axes.items():
+        if not isinstance(values, list) or not values:
+            _problem(problems, f"axes.{key}", values, "a non-empty list of values")
+    axes = {k: v for k, v in axes.items() if isinstance(v, list) and v}  # the others are reported
+    families = _table(table, "families", problems)
+    if not families:
+        problems.append("families: a study needs at least one family ([families.NAME] with case = ...)")
+    beds_table = _table(table, "beds", problems)
+    out = Path(out).resolve()  # run folders and bed states are read from other folders (the cases')
+    base = path.parent
+
+    def entry(kind, key, spec):
+        if not isinstance(spec, dict) or "case" not in spec:
+            _problem(problems, f"{kind}.{key}", spec, "a table with case = 'path of a case file'")
+            return None, {}
+        if not isinstance(spec["case"], str) or not spec["case"].strip():
+            _problem(problems, f"{kind}.{key}.case", spec["case"], "the path of a case file (a string)")
+            return None, {}
+        allowed = {"case", "set"} | ({"bed", "duration", "replicas"} if kind == "families" else set())
+        for k in sorted(set(spec) - allowed):
+            _problem(problems, f"{kind}.{key}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
+                     + ", ".join(sorted(allowed)))
+        case_path = (base / spec["case"]).resolve()
+        if not case_path.is_file():
+            _problem(problems, f"{kind}.{key}.case", spec["case"], f"no such case file ({case_path})")
+        sets = spec.get("set", {})
+        if not isinstance(sets, dict):
+            _problem(problems, f"{kind}.{key}.set", sets, "a table of case keys and values")
+            sets = {}
+        return str(case_path), sets
+
+    beds = []
+    for key, spec in beds_table.items():
+        case_path, sets = entry("beds", key, spec)
+        if case_path:
+            beds.append(BedSpec(key, case_path, {**settings, **sets}, str(out / "beds" / key)))
+    bed_names = {b.name for b in beds}
+    replica_beds: dict[tuple, str] = {}  # (bed, replica) -> the name of that replica's own bed
+
+    def replica_bed(bed_name, replica):
+        """Replica k >= 2 of a run that starts from a bed starts from its own bed, settled like the first
+        but with insertion seed (the bed's seed + k - 1): another realization of the same packing, so
+        replicas differ from the first step (a replica from one settled bed would be a bit-for-bit copy)."""
+        if replica == 1 or bed_name not in bed_names:
+            return bed_name
+        if (bed_name, replica) not in replica_beds:
+            first = next(b for b in beds if b.name == bed_name)
+            try:
+                seed = int(load_case(first.case, dict(first.overrides)).particles.insertion.seed)
+            except CaseError:
+                seed = 1  # the bed's own problems are reported below
+            name = f"{bed_name}_r{replica}"
+            if name in bed_names:
+                _problem(problems, f"beds.{name}", "...", f"a bed name that replica {replica} of bed {bed_name} "
+                         "needs for its own settled bed; rename it")
+            overrides = {**first.overrides, "particles.insertion.seed": seed + replica - 1}
+            beds.append(BedSpec(name, first.case, overrides, str(out / "beds" / name), replica))
+            replica_beds[(bed_name, replica)] = name
+        return replica_beds[(bed_name, replica)]
+
+    exclusions = table.get("exclude", [])
+    if not isinstance(exclusions, list) or not all(isinstance(e, dict) for e in exclusions):
+        _problem(problems, "exclude", exclusions, "a list of tables ([[exclude]] with family and axis values)")
+        exclusions = []
+    runs = []
+    names = list(axes)
+    for family, spec in families.items():
+        case_path, sets = entry("families", family, spec)
+        if not case_path:
+            continue
+        bed = spec.get("bed")
+        if bed is not None and not isinstance(bed, str):
+            _problem(problems, f"families.{family}.bed", bed, "the name of one of the study's beds (a string)")
+            bed = None
+        family_duration = spec.get("duration", duration)
+        if "duration" in spec and (not isinstance(family_duration, (int, float)) or isinstance(family_duration, bool)
+                                   or not 0 < family_duration < 1e6):
+            _problem(problems, f"families.{family}.duration", family_duration, "a number of simulated seconds > 0")
+            family_duration = duration
+        if bed is not None and bed not in bed_names:
+            _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+        family_replicas = _replicas(spec, f"families.{family}.replicas", replicas, problems)
+        for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
+            point = dict(zip(names, values))
+            if any(all((family if k == "family" else point.get(k)) == v for k, v in e.items()) for e in exclusions):
+                continue
+            for replica in range(1, family_replicas + 1):
+                label = "_".join(f"{k.split('.')[-1]}{v:g}" if isinstance(v, (int, float)) else f"{k.split('.')[-1]}{v}"
+                                 for k, v in point.items())
+                run_name = "_".join(x for x in (family, label, f"r{replica}" if family_replicas > 1 else "") if x)
+                run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
+                overrides = {**settings, **sets, **point, "time.end": run_duration}
+                if family_replicas > 1 and bed is None:  # a run that inserts its own particles
+                    overrides["particles.insertion.seed"] = replica
+                runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name),
+                                    replica_bed(bed, replica) if bed is not None else None, point, run_duration,
+                                    replica, report))
+    _check_names(runs, beds, problems)
+    cluster = _table(table, "cluster", problems)
+    check_cluster(cluster, problems)
+    # every case is checked before anything runs (a bed's final state does not exist yet: not loaded)
+    for spec in list(beds) + runs:
+        overrides = dict(spec.overrides)
+        try:
+            load_case(spec.case, overrides)
+        except CaseError as exc:
+            label = spec.name if SAFE_NAME.match(spec.name) else f"[{spec.name!r}]"  # refused above as well
+            problems += [f"{label}: {p}" for p in exc.problems]
+    if problems:
+        raise CaseError(problems)
+    return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report)
+
+
+def _replicas(table: dict, path: str, default: int, problems) -> int:
+    """``table``'s ``replicas`` (``default`` when absent): an integer 1-1000, else a problem and 1."""
+    value = table.get("replicas", default)
+    if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= 1000:
+        _problem(problems, path, value, "an integer 1-1000")
+        return 1
+    return value
+
+
+SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")  # a run's or bed's folder name
+
+
+def _check_names(runs, beds, problems) -> None:
+    """Every run and bed has its own folder with a plain name: two runs whose axis values print alike
+    (names show 6 significant digits: 2.0 and 2.0000001) or a name with brackets, spaces or slashes (a
+    list- or string-valued axis) are refused, with the family and axis values that make them."""
+    seen = {}
+    for spec in beds:
+        if not SAFE_NAME.match(spec.name):
+            problems.append(f"beds.{spec.name}: the bed's folder name {spec.name!r} is not plain; use letters, "
+                            "digits and . _ + - only")
+    for run in runs:
+        values = ", ".join(f"{k} = {v!r}" for k, v in run.point.items()) or "no axes"
+        if not SAFE_NAME.match(run.name):
+            problems.append(f"families.{run.family}: run {run.name!r} ({values}) is not a plain folder name; a "
+                            "list- or string-valued axis puts brackets, spaces or slashes into it; use numbers or "
+                            "plain words (letters, digits and . _ + -)")
+        elif run.name in seen:
+            other = seen[run.name]
+            others = ", ".join(f"{k} = {v!r}" for k, v in other.point.items())
+            problems.append(f"axes: runs of family {run.family} ({values}) and {other.family} ({others}) are both "
+                            f"named {run.name!r}: run names show values to 6 significant digits; make them differ "
+                            "there")
+        else:
+            seen[run.name] = run
+
+
+def select_runs(study: Study, only) -> Study:
+    """The study with only the runs named in ``only`` (and the beds they start from); ``CaseError``
+    naming the study's runs for a name it does not have."""
+    if not only:
+        return study
+    names = {r.name for r in study.runs}
+    unknown = [n for n in only if n not in names]
+    if unknown:
+        raise CaseError([f"--only: {', '.join(unknown)}: not a run of study {study.name}; its runs are "
+                         f"{', '.join(r.name for r in study.runs)}"])
+    runs = tuple(r for r in study.runs if r.name in set(only))
+    beds = tuple(b for b in study.beds if b.name in {r.bed for r in runs})
+    return replace(study, runs=runs, beds=beds)

@@ -1,0 +1,2 @@
+"""fvdem's version (a leaf: what made a run names it, and the package metadata reads it)."""
+__version__ = "0.2.0"
