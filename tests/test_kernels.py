@@ -1,6 +1,9 @@
-"""The compiled closures and exchange kernels (``fvdem.coupling.kernels``) against the numpy
-closures they replace in the bridge (kept as the reference), to 1e-12."""
+"""The compiled closures (each law of ``fvdem.coupling.laws`` through the generic loops of
+``fvdem.coupling.kernels``) against the same law run in plain Python, and against the values fvdem 0.2.0's
+separately written numpy and numba closures gave (``tests/data/law_values_0.2.0.npz``), to 1e-12; and the
+bridge's exchange kernels against numpy."""
 import warnings
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -43,20 +46,20 @@ def assert_close(actual, expected):
     np.testing.assert_allclose(actual, expected, rtol=1e-12, atol=1e-12 * scale)
 
 
-LAWS_WITH_KERNELS = [(kind, name) for kind in ("drag", "lift", "torque") for name, law in closures.LAWS[kind].items()
-                     if law.kernel is not None]
+ALL_LAWS = [(kind, name) for kind in ("drag", "lift", "torque") for name in closures.LAWS[kind]]
+RECORDED = Path(__file__).parent / "data" / "law_values_0.2.0.npz"
 
 
-def test_every_seed_law_has_a_kernel():
+def test_every_seed_law_is_registered():
     for kind, name in (("drag", "hoelzer-sommerfeld"), ("drag", "sanjeevi-padding"), ("drag", "gidaspow"),
                        ("drag", "beetstra"), ("drag", "tenneti"), ("drag", "tang"), ("lift", "zastawny"),
                        ("lift", "sanjeevi-padding"), ("torque", "zastawny"), ("torque", "sanjeevi-padding")):
-        assert (kind, name) in LAWS_WITH_KERNELS
+        assert (kind, name) in ALL_LAWS
 
 
-@pytest.mark.parametrize("kind,name", LAWS_WITH_KERNELS)
+@pytest.mark.parametrize("kind,name", ALL_LAWS)
 @pytest.mark.parametrize("particle_name", list(PARTICLES))
-def test_kernel_equals_numpy_closure(kind, name, particle_name):
+def test_compiled_law_equals_the_same_law_in_python_and_fvdem_0_2_0(kind, name, particle_name):
     law = closures.law(kind, name)
     d, length, (rho, mu) = PARTICLES[particle_name]
     shape = "sphere" if length <= d else "spherocylinder"
@@ -66,15 +69,24 @@ def test_kernel_equals_numpy_closure(kind, name, particle_name):
     slip, voidage, axis = inputs()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # range warnings of the dense laws
-        expected = law.function(particle, slip, voidage, axis)
+        expected = law.reference_values(particle, slip, voidage, axis)
         actual = law.evaluate(particle, slip, voidage, axis)
+    if law.none and kind != "drag":
+        assert actual is None and expected is None
+        return
     assert actual.shape == expected.shape
     assert np.all(np.isfinite(actual))
     assert_close(actual, expected)
-    if kind == "drag":
-        assert np.all(actual > 0)
-    else:  # no lift or torque along the axis
-        assert np.all(actual[[0, 1]] == 0.0)
+    if name != "none":
+        if kind == "drag":
+            assert np.all(actual > 0)
+        else:  # no lift or torque along the axis
+            assert np.all(actual[[0, 1]] == 0.0)
+    # the values of 0.2.0's closures (96 of the same kind of inputs)
+    with np.load(RECORDED) as recorded, warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        assert_close(law.evaluate(particle, recorded["slip"], recorded["voidage"], recorded["axis"]),
+                     recorded[f"{kind}/{name}/{particle_name}"])
 
 
 def test_kernel_path_warns_outside_the_fitted_range():
@@ -86,11 +98,29 @@ def test_kernel_path_warns_outside_the_fitted_range():
     closures.reset_range_warnings()
 
 
-def test_law_without_kernel_runs_its_numpy_function():
-    law = closures.Law("drag", "constant", lambda particle, slip, voidage, axis: np.full(len(slip), 2.0),
-                       ("sphere",), None, "", "", "")
-    particle = closures.ParticleShape(1e-3, 1e-3, *AIR)
-    assert np.all(law.evaluate(particle, np.ones((4, 3)), np.ones(4), np.ones((4, 3))) == 2.0)
+def test_a_law_is_registered_only_compiled_for_its_kinds_signature():
+    """A law is a compiled scalar function of one particle with its kind's signature (``laws.DRAG``,
+    ``laws.FORCE``): registered so, it runs through the generic loop; a plain Python function, or one
+    compiled for another signature, is refused at registration with the decorator to use."""
+    from numba import njit
+
+    from fvdem.coupling import laws
+
+    @njit(laws.DRAG, cache=False)
+    def constant(sx, sy, sz, eps, ax, ay, az, shape):
+        return 2.0
+
+    try:
+        closures.register("drag", "constant-test")(constant)
+        particle = closures.ParticleShape(1e-3, 1e-3, *AIR)
+        assert np.all(closures.law("drag", "constant-test").evaluate(particle, np.ones((4, 3)), np.ones(4),
+                                                                     np.ones((4, 3))) == 2.0)
+    finally:
+        closures.LAWS["drag"].pop("constant-test", None)
+    for wrong in (lambda particle, slip, voidage, axis: np.ones(len(slip)), laws.zastawny_lift):
+        with pytest.raises(TypeError, match=r"njit\(fvdem.coupling.laws.DRAG, cache=True\)"):
+            closures.register("drag", "wrong-test")(wrong)
+    assert "wrong-test" not in closures.LAWS["drag"]
 
 
 def grid_weights(n, cells, width, seed=5):
@@ -158,17 +188,17 @@ def test_exchange_terms_equal_numpy_response_and_deposition():
         assert_close(source, source_ref)
 
 
-@pytest.mark.parametrize("laws", list(closures.FUSED))
-def test_fused_set_equals_its_laws_one_by_one(laws):
+@pytest.mark.parametrize("laws", [("sanjeevi-padding", "sanjeevi-padding", "sanjeevi-padding"),
+                                  ("hoelzer-sommerfeld", "zastawny", "zastawny"), ("gidaspow", "none", "none")])
+def test_a_set_in_one_pass_equals_its_laws_one_by_one(laws):
     drag, lift, torque = laws
     particle = closures.ParticleShape(3.2e-3, 12.8e-3, *AIR)
     slip, voidage, axis = inputs()
     voidage = np.maximum(voidage, 0.65)  # within the fitted solids fractions
-    fused = closures.evaluate_set(particle, drag, lift, torque, slip, voidage, axis)
-    for kind, name, value in zip(("drag", "lift", "torque"), laws, fused):
-        law = closures.law(kind, name)
-        assert np.array_equal(value, law.evaluate(particle, slip, voidage, axis))  # the same expressions
-        assert_close(value, law.function(particle, slip, voidage, axis))
+    together = closures.evaluate_set(particle, drag, lift, torque, slip, voidage, axis)
+    for kind, name, value in zip(("drag", "lift", "torque"), laws, together):
+        alone = closures.law(kind, name).evaluate(particle, slip, voidage, axis)
+        assert (value is None and alone is None) or np.array_equal(value, alone)
 
 
 @pytest.mark.parametrize("fixed", [False, True])
@@ -220,3 +250,22 @@ def test_column_sums_equal_numpy_on_any_thread_count(n):
     np.testing.assert_allclose(results[0], values.sum(axis=0), rtol=0, atol=1e-12 * np.abs(values).sum())
     for other in results[1:]:
         assert np.array_equal(other, results[0])
+
+
+@pytest.mark.parametrize("kind", ["drag", "force"])
+def test_the_builtin_loops_run_the_law_their_index_names(kind):
+    """``kernels._drag`` / ``_force`` dispatch index k to ``DRAG_LAWS[k]`` / ``FORCE_LAWS[k]``: the loop with
+    the law inlined gives what the first-class loop gives with the law itself, for every built-in law."""
+    particle = closures.ParticleShape(3.2e-3, 12.8e-3, *AIR)
+    slip, voidage, axis = closures.kernel_inputs(*inputs(n=200))
+    shape = particle.kernel_args
+    table = kernels.DRAG_LAWS if kind == "drag" else kernels.FORCE_LAWS
+    for k, law in enumerate(table):
+        inlined = np.empty(len(slip)) if kind == "drag" else np.empty((len(slip), 3))
+        generic = np.empty_like(inlined)
+        (kernels.builtin_drag_loop if kind == "drag" else kernels.builtin_force_loop)(k, slip, voidage, axis, shape,
+                                                                                       inlined)
+        (kernels.drag_loop if kind == "drag" else kernels.force_loop)(law, slip, voidage, axis, shape, generic)
+        assert_close(inlined, generic)
+    registered = {l.scalar for kind_laws in closures.LAWS.values() for l in kind_laws.values()}
+    assert set(table) <= registered

@@ -76,8 +76,8 @@ class HydrodynamicModel:
         return closures.law("lift", self.lift).evaluate(self.particle, slip, voidage, axis)
 
     def evaluate(self, slip, voidage, axis):
-        """``(c, lift, torque)`` of the model's laws (lift/torque None when 'none'), one fused kernel pass
-        where the set has one (``closures.FUSED``)."""
+        """``(c, lift, torque)`` of the model's laws (lift/torque None when 'none'), in one pass over the
+        particles (``closures.evaluate_set``)."""
         return closures.evaluate_set(self.particle, self.drag, self.lift, self.torque, slip, voidage, axis)
 
     def hydrodynamic_torque(self, slip, voidage, axis):
