@@ -164,29 +164,28 @@ def isolated_torque_magnitude(re):
 
 
 @njit(cache=True, inline="always")
-def lift_direction(sx, sy, sz, ax, ay, az):
-    """Unit lift direction (Eq. 23): ``sign(a.u) ((a x u) x u) / |(a x u) x u|``; zero where the axis is
-    parallel or perpendicular to the slip. Unchanged when the axis is reversed."""
-    au = ax * sx + ay * sy + az * sz
-    cx, cy, cz = ay * sz - az * sy, az * sx - ax * sz, ax * sy - ay * sx  # a x u
-    vx, vy, vz = cy * sz - cz * sy, cz * sx - cx * sz, cx * sy - cy * sx  # (a x u) x u
+def _signed_unit(vx, vy, vz, dot):
+    """``sign(dot) v / |v|``; zero where ``v`` or ``dot`` vanishes (the lift and torque directions)."""
     norm = math.sqrt(vx * vx + vy * vy + vz * vz)
-    if norm > 1e-300 and au != 0.0:
-        s = 1.0 if au > 0 else -1.0
+    if norm > 1e-300 and dot != 0.0:
+        s = 1.0 if dot > 0 else -1.0
         return s * vx / norm, s * vy / norm, s * vz / norm
     return 0.0, 0.0, 0.0
 
 
 @njit(cache=True, inline="always")
+def lift_direction(sx, sy, sz, ax, ay, az):
+    """Unit lift direction (Eq. 23): ``sign(a.u) ((a x u) x u) / |(a x u) x u|``; zero where the axis is
+    parallel or perpendicular to the slip. Unchanged when the axis is reversed."""
+    cx, cy, cz = ay * sz - az * sy, az * sx - ax * sz, ax * sy - ay * sx  # a x u
+    vx, vy, vz = cy * sz - cz * sy, cz * sx - cx * sz, cx * sy - cy * sx  # (a x u) x u
+    return _signed_unit(vx, vy, vz, ax * sx + ay * sy + az * sz)
+
+
+@njit(cache=True, inline="always")
 def torque_direction(sx, sy, sz, ax, ay, az):
     """Unit torque direction (Eq. 28): ``sign(u.a) (u x a) / |u x a|``; unchanged when the axis is reversed."""
-    ua = sx * ax + sy * ay + sz * az
-    vx, vy, vz = sy * az - sz * ay, sz * ax - sx * az, sx * ay - sy * ax
-    norm = math.sqrt(vx * vx + vy * vy + vz * vz)
-    if norm > 1e-300 and ua != 0.0:
-        s = 1.0 if ua > 0 else -1.0
-        return s * vx / norm, s * vy / norm, s * vz / norm
-    return 0.0, 0.0, 0.0
+    return _signed_unit(sy * az - sz * ay, sz * ax - sx * az, sx * ay - sy * ax, sx * ax + sy * ay + sz * az)
 
 
 @njit(cache=True, inline="always")
