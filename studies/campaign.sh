@@ -11,12 +11,16 @@
 # Study folders live outside the work tree (~/fvdem-runs), so a new work tree loses nothing; finished
 # runs are skipped, interrupted ones resume bit-for-bit from their checkpoints (a run resumed by newer code
 # says so in its run.log). Two runs at a time, one numba thread each (more threads than free cores stall
-# OpenMP: docs/benchmarks.md). Stage 2 starts when stage 1 has ended, whether or not one of its runs failed.
+# OpenMP: docs/benchmarks.md). Stage 1's last run (AR-4 MP at 2 x the experiment's Umf) runs beside stage 2 on
+# one worker (three single-threaded runs on two cores while it lasts); stage 2 reuses stage 1's settled beds
+# where they are the same (ar1, ar1_r2, ar4: copied once, 2026-12-03).
 set -u
 cd "$(dirname "$0")/.."
 [ -x .venv/bin/fvdem ] || make venv
 OUT=${FVDEM_RUNS:-$HOME/fvdem-runs}
-.venv/bin/fvdem study studies/mema2020_stage1.toml --out "$OUT/mema2020_stage1" --workers 2
-status=$?
-[ $status -eq 130 ] && exit $status  # stopped (Ctrl-C, --stop, SIGTERM): not a reason to start stage 2
+.venv/bin/fvdem study studies/mema2020_stage1.toml --out "$OUT/mema2020_stage1" --workers 1 &
+stage1=$!
 .venv/bin/fvdem study studies/mema2020_stage2.toml --out "$OUT/mema2020_stage2" --workers 2
+status=$?
+wait $stage1
+exit $status
