@@ -151,3 +151,17 @@ def test_no_import_beside_or_above_a_modules_layer():
             if RANK[other] >= RANK[own]:
                 wrong.append(f"{module} imports {target} (layer {RANK[other]}, its own {RANK[own]})")
     assert not wrong, "\n".join(sorted(wrong))
+
+
+def test_the_bridge_steps_the_dem_through_its_coupled_step_and_never_sees_its_order():
+    """The DEM re-sorts its particles by cell when it rebuilds its list; that stays inside it: the bridge
+    calls ``coupled_step`` (the drag impulse comes back in the order the particles had when it was called)
+    and reads neither the impulse array nor the particle ids to put rows back in order."""
+    tree = ast.parse((PACKAGE / "coupling" / "bridge.py").read_text())
+    attributes = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
+    assert "coupled_step" in attributes and "drag_impulse" not in attributes
+    dem_steps = [node for node in ast.walk(tree) if isinstance(node, ast.Attribute) and node.attr == "step"
+                 and "dem" in ast.unparse(node.value)]
+    assert not dem_steps, [ast.unparse(n) for n in dem_steps]
+    calls_on_ids = [node for node in ast.walk(tree) if isinstance(node, ast.Attribute) and node.attr == "ids"]
+    assert len(calls_on_ids) <= 1  # the particle id named in the explicit-drag stability error only

@@ -211,14 +211,11 @@ class CouplingBridge:
                 p.external_torque += rotational_drag_torque(p.angular_velocity, p.inertia[:, 0],
                                                             self._rotational_coefficient, dt)
             p.drag_coefficient[:] = c if self.semi_implicit else 0.0
-            p.drag_impulse[:] = 0.0
-            ids_before = p.ids.copy()
             t_dem = clock()
-            dem.step(self.substeps)
+            applied = dem.coupled_step(self.substeps)  # in the particles' order of this interval
             t_after_gas += clock() - t_dem  # the DEM times itself
-            p = dem.particles
             # explicit: the held force is what both sides exchanged; semi-implicit: what the kicks applied
-            impulse = None if explicit_drag is not None else _in_order(p.drag_impulse, p.ids, ids_before)
+            impulse = None if explicit_drag is not None else applied
         returned = 0.0
         if impulse is not None and cfg.two_way:
             # the gas lost V (beta u - S) dt per cell (u its momentum velocity); the particles gained
@@ -255,11 +252,3 @@ class CouplingBridge:
                 "total_drag_z": float(self.last["drag_force"][2]),
                 "total_pressure_force_z": float(self.last["pressure_force"][2])}
 
-
-def _in_order(values, ids_now, ids_before):
-    """Rows of ``values`` (in the order of ``ids_now``) rearranged into the order of ``ids_before``."""
-    if np.array_equal(ids_now, ids_before):
-        return values
-    row_of = np.empty(int(max(ids_now.max(), ids_before.max())) + 1, np.int64)
-    row_of[ids_now] = np.arange(len(ids_now))
-    return values[row_of[ids_before]]

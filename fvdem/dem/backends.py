@@ -5,11 +5,13 @@ The interface (``DEMBackend``) is what the model, the coupling bridge, the scene
 touch of a DEM, and nothing else:
 
 - ``particles``: the host view of the particle arrays (``ParticleArrays``): positions, velocities,
-  orientations and colours the observables and writers read; the coupling inputs the bridge writes
-  (``drag_coefficient``, ``fluid_velocity``, ``external_force``, ``external_torque``) and the drag impulse
-  it reads back (``drag_impulse``). A backend that keeps its arrays elsewhere (a GPU) copies them here
-  when asked, and the bridge owns when that happens.
+  orientations and colours the observables and writers read, and the coupling inputs the bridge writes
+  before a coupled step (``drag_coefficient``, ``fluid_velocity``, ``external_force``, ``external_torque``).
+  A backend that keeps its arrays elsewhere (a GPU) copies them here when asked.
 - ``implicit_drag`` (bool, set by the bridge): the kicks integrate ``drag_coefficient (fluid_velocity - v)``.
+- ``coupled_step(steps)``: steps with those inputs and returns the drag impulse the kicks applied (N, 3),
+  in the particles' order at the call; a backend that re-sorts its particles (the CPU one does, by cell)
+  keeps that to itself.
 - ``step(steps)``, ``step_count``, ``time``, ``dt``, ``gravity``, ``box``.
 - ``diagnostics()`` (scalars: kinetic energy, largest overlap, contacts, speeds), ``rebuild_count``,
   ``check_health()`` (``SimulationError`` with the cause), ``timings`` (``fvdem.timing.Timings``, shared
@@ -34,6 +36,7 @@ class DEMBackend(Protocol):
     rebuild_count: int
 
     def step(self, steps: int = 1) -> None: ...
+    def coupled_step(self, steps: int): ...
     def diagnostics(self) -> dict: ...
     def check_health(self) -> None: ...
     def state(self) -> dict: ...

@@ -219,6 +219,18 @@ class DEMSystem:
         self.timings.add("neighbour_list", neighbours)
         self.timings.add("contact_forces", forces)
 
+    def coupled_step(self, steps: int) -> np.ndarray:
+        """``step(steps)`` with the coupling inputs the bridge wrote into ``particles`` (``drag_coefficient``,
+        ``fluid_velocity``, ``external_force``, ``external_torque``, in the particles' order at the call);
+        returns the drag impulse [N s] (N, 3) the kicks applied over the steps, in that same order. The
+        DEM re-sorts its particles by cell when it rebuilds its neighbour list; that stays inside it."""
+        p = self.particles
+        p.drag_impulse[:] = 0.0
+        ids_before = p.ids.copy()
+        self.step(steps)
+        p = self.particles
+        return rows_in_order(p.drag_impulse, p.ids, ids_before)
+
     def compute_forces(self) -> None:
         p = self.particles
         block_start, deferred, deferred_rows = self._blocks
@@ -377,3 +389,12 @@ class DEMSystem:
         self.compute_forces()
         self.particles.contact_force[:], self.particles.contact_torque[:] = saved[0], saved[1]
         self.history[:], self.wall_history[:], self.wall_mask[:] = saved[2], saved[3], saved[4]
+
+
+def rows_in_order(values, ids_now, ids_before):
+    """Rows of ``values`` (in the order of ``ids_now``) rearranged into the order of ``ids_before``."""
+    if np.array_equal(ids_now, ids_before):
+        return values
+    row_of = np.empty(int(max(ids_now.max(), ids_before.max())) + 1, np.int64)
+    row_of[ids_now] = np.arange(len(ids_now))
+    return values[row_of[ids_before]]
