@@ -52,3 +52,23 @@ def test_fvdem_prefers_the_openmp_threading_layer_unless_the_user_chose_one():
     _, used = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                              timeout=120, check=True).stdout.split()
     assert used == "workqueue"
+
+
+def test_a_log_progress_ends_on_its_last_postfix_when_asked():
+    """A study's progress in a log: its 100 % line may come while a run's result is still on its way (the
+    run folders are read, not the results); with ``final_postfix`` the closing line says how many runs
+    ended, without it (a run's steps per second) no line is repeated."""
+    import io
+
+    from fvdem.io.progress import LineProgress
+    for final, lines in ((True, 2), (False, 1)):
+        stream = io.StringIO()
+        bar = LineProgress(1.0, desc="study", step_percent=2.0, stream=stream)
+        bar.final_postfix = final
+        bar.set_postfix_str("1/2 runs done")
+        bar.update(1.0)
+        bar.set_postfix_str("2/2 runs done")
+        bar.close()
+        printed = stream.getvalue().splitlines()
+        assert len(printed) == lines and "100%" in printed[-1]
+        assert ("2/2 runs done" in printed[-1]) == final

@@ -22,7 +22,9 @@ class LineProgress:
         self._start_n, self._start = self.n, _time.perf_counter()
         self._next = (int(self._percent() // self.step) + 1) * self.step
         self._postfix = ""
-        self._printed = self.n
+        self._printed, self._printed_postfix = self.n, ""
+        # print a last line at close when only the postfix changed since the last (a study's runs done)
+        self.final_postfix = False
 
     def _percent(self) -> float:
         return 100.0 * self.n / self.total if self.total > 0 else 100.0
@@ -47,13 +49,14 @@ class LineProgress:
         left = elapsed * (self.total - self.n) / done if done > 0 else float("nan")
         rate = f", {self._postfix}" if self._postfix else ""
         eta = self._clock(left) if left == left else "?"
-        self._printed = self.n
+        self._printed, self._printed_postfix = self.n, self._postfix
         print(f"{self.desc}: {self._percent():3.0f}% {self.n:.4f}/{self.total:.4f} s{rate}, "
               f"elapsed {self._clock(elapsed)}, left {eta}", file=self.stream, flush=True)
 
     def close(self) -> None:
-        """A last line where the run stopped between two steps of ``step_percent``."""
-        if self.n > self._printed:
+        """A last line where the run stopped between two steps of ``step_percent`` (or, with
+        ``final_postfix``, where only the postfix changed after the last line)."""
+        if self.n > self._printed or (self.final_postfix and self._postfix != self._printed_postfix):
             self._print()
 
 

@@ -119,6 +119,7 @@ class _StudyProgress:
         self.bar = progress_bar(self.total, self._simulated(), f"study {study.name} (simulated s)")
         if hasattr(self.bar, "step"):
             self.bar.step = 2.0
+            self.bar.final_postfix = True  # the last line says how many runs ended, even after the 100 % line
         self.is_tqdm = not hasattr(self.bar, "step")
 
     def _simulated(self) -> float:
