@@ -49,6 +49,58 @@ def test_half_list_is_complete_and_unique_against_brute_force(skin, span):
     assert expected == listed
 
 
+def _listed_pairs(system):
+    p = system.particles
+    return {(p.ids[i], p.ids[system.neighbours[slot]]) for i in range(p.count)
+            for slot in range(system.row_start[i], system.row_start[i + 1])}
+
+
+def _brute_force_pairs(system):
+    """Pairs (ids, in the order the list holds them) whose axis segments are within the radii plus
+    the skin (a box without periodic axes)."""
+    p = system.particles
+    listed = _listed_pairs(system)
+    expected = set()
+    for i in range(p.count):
+        for j in range(i + 1, p.count):
+            d = segment_distance(p.position[i], p.axis[i], p.half_length[i], p.position[j], p.axis[j],
+                                 p.half_length[j])
+            if d < p.radius[i] + p.radius[j] + system.skin:
+                a, b = p.ids[i], p.ids[j]
+                expected.add((a, b) if (a, b) in listed else (b, a))
+    return expected
+
+
+def test_a_mixture_of_sizes_and_shapes_is_listed_completely():
+    """Spheres and rods of several radii and lengths: the rods' scan bounds every candidate's reach by
+    the largest particle's, and the point-segment and segment-segment tests use each pair's own sizes."""
+    rng = np.random.default_rng(11)
+    n = 300
+    r = rng.choice([1.0e-3, 1.5e-3, 2.5e-3], n)
+    h = rng.choice([0.0, 2.0e-3, 4.5e-3, 8.0e-3], n)
+    pos = rng.uniform(0.01, 0.07, size=(n, 3))
+    s = make_system(pos, r, h, axis=rng.normal(size=(n, 3)), box=Box((0.0, 0.0, 0.0), (0.08, 0.08, 0.08)),
+                    skin=2e-3)
+    assert s.track_orientation and len(s.neighbours) > n
+    assert _brute_force_pairs(s) == _listed_pairs(s)
+
+
+def test_a_row_that_exactly_fills_the_buffer_widens_it():
+    """The rods' build writes each tested candidate at the row's next slot, the last one while the row is
+    full, so a row is complete only below the buffer's width: one that fills it exactly must be redone."""
+    rng = np.random.default_rng(5)
+    n = 400
+    pos = rng.uniform(0.005, 0.045, size=(n, 3))
+    s = make_system(pos, 1.5e-3, 4.5e-3, axis=rng.normal(size=(n, 3)),
+                    box=Box((0.0, 0.0, 0.0), (0.05, 0.05, 0.05)), skin=3e-3)
+    reference = _listed_pairs(s)
+    longest = int(np.diff(s.row_start).max())
+    s._row_buffer = np.empty((n, longest), np.int32)
+    s.rebuild()
+    assert s._row_buffer.shape[1] > longest
+    assert _listed_pairs(s) == reference == _brute_force_pairs(s)
+
+
 def _sliding_pair(skin):
     """A sphere pressed on another and dragged sideways: a long-lived sliding/sticking contact."""
     d = 4e-3

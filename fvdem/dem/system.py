@@ -282,12 +282,12 @@ class DEMSystem:
                 self._scratch = np.empty((numba.config.NUMBA_NUM_THREADS, candidates + candidates // 2), np.int32)
         args = (p.position, p.axis, p.radius, p.half_length, self._box_lo, self._box_len, self._periodic,
                 self._cell_size, self._n_cells, self._cell_of, start, self.skin, self.cell_span,
-                not self.track_orientation)
+                not self.track_orientation, 0.5 * self._extent)
         if self._row_buffer.shape[0] != n:
             self._row_buffer = np.empty((n, self._row_buffer.shape[1]), np.int32)
         build_half_list(*args, self._row_buffer, counts, self._scratch)
         longest = int(counts.max()) if n else 0
-        if longest > self._row_buffer.shape[1]:  # a row overflowed: widen the buffer (with room) and redo
+        if longest >= self._row_buffer.shape[1]:  # a row filled or overflowed: widen the buffer (with room), redo
             self._row_buffer = np.empty((n, longest + longest // 2 + 1), np.int32)
             build_half_list(*args, self._row_buffer, counts, self._scratch)
         row_start = row_offsets(counts)
@@ -311,6 +311,7 @@ class DEMSystem:
         """The contact kernel's race-free blocks of the current list (``neighbours.contact_blocks``)."""
         self._blocks = contact_blocks(self.row_start, self.neighbours, self._cell_of,
                                       int(self._n_cells[0] * self._n_cells[1]), self.cell_span, CONTACT_BLOCKS)
+
 
     # ------------------------------------------------------------------ diagnostics
     def diagnostics(self) -> dict:
