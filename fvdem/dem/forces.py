@@ -229,9 +229,10 @@ def _sphere_row(i, position, velocity, angular_velocity, radius, mass, inertia, 
 
 @njit(cache=True, inline="always")
 def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
-                   wall_active, box_lo, box_hi, bounds, wall_history, wall_mask, params, law):
+                   wall_active, bounds, wall_history, wall_mask, params, law):
     """Particle i's contacts with the active walls (faces x-, x+, y-, y+, z-, z+; ``bounds`` their
-    positions as scalars ``(x-, x+, y-, y+, z-, z+)``, -inf / +inf where inactive): returns
+    positions as scalars ``(x-, x+, y-, y+, z-, z+)``, -inf / +inf where inactive; ``bounds[face]`` for a
+    face's position): returns
     ``(fx, fy, fz, tx, ty, tz, largest overlap / diameter, contacts)``. ``wall_history`` is flat
     ``(N * 12, 4)``: slot ``(i*6 + face)*2 + end``; bit ``face*2 + end`` of ``wall_mask[i]`` is set while
     that slot holds a contact, so particles away from walls cost one integer read instead of twelve
@@ -256,7 +257,7 @@ def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_l
             continue
         d = face // 2
         upper = face % 2 == 1
-        gap = box_hi[d] - position[i, d] if upper else position[i, d] - box_lo[d]
+        gap = bounds[face] - position[i, d] if upper else position[i, d] - bounds[face]
         if gap >= r + h:  # out of reach of this wall: clear stale histories only
             if mask & (3 << (2 * face)):
                 for end in range(2):
@@ -271,7 +272,7 @@ def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_l
             ey = sign * h * axis[i, 1]
             ez = sign * h * axis[i, 2]
             e_d = position[i, d] + (ex if d == 0 else (ey if d == 1 else ez))
-            dist = box_hi[d] - e_d if upper else e_d - box_lo[d]
+            dist = bounds[face] - e_d if upper else e_d - bounds[face]
             slot = (i * 6 + face) * 2 + end
             overlap = r - dist
             bit = 1 << (2 * face + end)
@@ -312,9 +313,11 @@ def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_l
 
 @njit(cache=True, inline="always")
 def _row(i, spheres, position, velocity, angular_velocity, axis, radius, half_length, mass, inertia, row_start,
-         neighbours, history, wall_active, box_lo, box_hi, bounds, wall_history, wall_mask, box_length, periodic, params,
+         neighbours, history, wall_active, bounds, wall_history, wall_mask, box_length, periodic, params,
          law, uniform, force, torque, row_max_overlap, row_contacts, row_wall_contacts):
-    """Row i's pairs and particle i's walls, accumulated onto ``force``/``torque``."""
+    """Row i's pairs and particle i's walls, accumulated onto ``force``/``torque``. At most 30 arguments
+    (a call with more cannot be inlined; docs/ARCHITECTURE.md, "Why the DEM kernels take their arrays one
+    by one")."""
     if spheres:
         fx, fy, fz, tx, ty, tz, pair_overlap, touching = _sphere_row(
             i, position, velocity, angular_velocity, radius, mass, inertia, row_start, neighbours, history,
@@ -324,8 +327,8 @@ def _row(i, spheres, position, velocity, angular_velocity, axis, radius, half_le
             i, position, velocity, angular_velocity, axis, radius, half_length, mass, inertia, row_start,
             neighbours, history, force, torque, box_length, periodic, params, law, uniform)
     wfx, wfy, wfz, wtx, wty, wtz, wall_overlap, walls = _wall_contacts(
-        i, position, velocity, angular_velocity, axis, radius, half_length, mass, inertia, wall_active, box_lo,
-        box_hi, bounds, wall_history, wall_mask, params, law)
+        i, position, velocity, angular_velocity, axis, radius, half_length, mass, inertia, wall_active, bounds,
+        wall_history, wall_mask, params, law)
     force[i, 0] += fx + wfx
     force[i, 1] += fy + wfy
     force[i, 2] += fz + wfz
@@ -370,11 +373,11 @@ def contact_forces(spheres, position, velocity, angular_velocity, axis, radius, 
                 if deferred[i]:
                     continue
                 _row(i, spheres, position, velocity, angular_velocity, axis, radius, half_length, mass, inertia,
-                     row_start, neighbours, history, wall_active, box_lo, box_hi, bounds, wall_history, wall_mask,
+                     row_start, neighbours, history, wall_active, bounds, wall_history, wall_mask,
                      box_length, periodic, params, law, uniform, force, torque, row_max_overlap, row_contacts,
                      row_wall_contacts)
     for k in range(deferred_rows.shape[0]):
         _row(deferred_rows[k], spheres, position, velocity, angular_velocity, axis, radius, half_length, mass,
-             inertia, row_start, neighbours, history, wall_active, box_lo, box_hi, bounds, wall_history, wall_mask,
+             inertia, row_start, neighbours, history, wall_active, bounds, wall_history, wall_mask,
              box_length, periodic, params, law, uniform, force, torque, row_max_overlap, row_contacts,
              row_wall_contacts)
