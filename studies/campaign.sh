@@ -14,8 +14,13 @@
 # OpenMP: docs/benchmarks.md). Stage 1's last run (AR-4 MP at 2 x the experiment's Umf) runs beside stage 2 on
 # one worker (three single-threaded runs on two cores while it lasts); stage 2 reuses stage 1's settled beds
 # where they are the same (ar1, ar1_r2, ar4: copied once, 2026-12-03).
+# Timing anything else while it runs: pause the whole campaign (kill -STOP -- -<its process group>, then
+# -CONT). Dask's scheduler restarts a worker that has not sent a heartbeat for its worker-ttl (default 5 min),
+# killing its run back to the last checkpoint; that happened once after a series of pauses (2026-12-03), so
+# the campaign's scheduler waits an hour: a local run that hangs still shows in its progress lines.
 set -u
 cd "$(dirname "$0")/.."
+export DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL="${DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL:-1 hour}"
 [ -x .venv/bin/fvdem ] || make venv
 OUT=${FVDEM_RUNS:-$HOME/fvdem-runs}
 .venv/bin/fvdem study studies/mema2020_stage1.toml --out "$OUT/mema2020_stage1" --workers 1 &
