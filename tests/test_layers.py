@@ -165,3 +165,19 @@ def test_the_bridge_steps_the_dem_through_its_coupled_step_and_never_sees_its_or
     assert not dem_steps, [ast.unparse(n) for n in dem_steps]
     calls_on_ids = [node for node in ast.walk(tree) if isinstance(node, ast.Attribute) and node.attr == "ids"]
     assert len(calls_on_ids) <= 1  # the particle id named in the explicit-drag stability error only
+
+
+def test_the_bridge_owns_the_coupling_inputs_and_writes_nothing_of_the_dem():
+    """The coupling inputs are the bridge's own buffers (``CouplingInputs``) handed to ``coupled_step``: no
+    assignment in the bridge has the DEM or its particle arrays (``dem.``, ``p.``, ``particles.``) on its
+    left side, whole or in part, and it sets no flag of the DEM."""
+    tree = ast.parse((PACKAGE / "coupling" / "bridge.py").read_text())
+    targets = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign)):
+            targets += node.targets if isinstance(node, ast.Assign) else [node.target]
+    written = [ast.unparse(t) for t in targets if isinstance(t, (ast.Attribute, ast.Subscript))]
+    into_dem = [w for w in written if w.split("[")[0].split(".")[0] in ("p", "dem", "particles")
+                or ".dem." in w or "particles." in w]
+    assert not into_dem, into_dem
+    assert any("inputs.drag_coefficient" in w for w in written)  # the check sees the bridge's own writes

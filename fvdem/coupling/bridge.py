@@ -19,9 +19,10 @@ Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
    particles much faster than the step it is ``m / dt`` (the particle follows the gas) instead of a
    stiff ``c`` that would stall the exchange. *Explicit*: the force at the coupling time is held
    over the interval on both sides (CFDEMcoupling's default; unstable for ``dt > 2 m / c``).
-4. **Particles**: the new gas velocity and pressure gradient are interpolated; the DEM kicks
-   integrate ``c (u - v)`` implicitly (``implicit_drag``) and hold ``-V_p grad p`` + lift and the
-   torque; the kicks record the drag impulse they apply.
+4. **Particles**: the new gas velocity and pressure gradient are interpolated into the bridge's own
+   buffers (``CouplingInputs``), which the DEM's ``coupled_step`` copies in: its kicks integrate
+   ``c (u - v)`` implicitly and hold ``-V_p grad p`` + lift and the torque, and it returns the drag
+   impulse they applied, in the particles' order of the call.
 5. **Exact exchange**: the gas lost ``V (beta u - S) dt`` per cell, the particles gained the
    recorded impulse; the difference — from contact forces changing within the interval — is
    returned to the gas as a source of its next step (``GasPhase.returned_momentum``; added to the
@@ -39,6 +40,7 @@ from time import perf_counter
 
 import numpy as np
 
+from ..dem.backends import CouplingInputs
 from ..errors import SimulationError
 from . import closures
 from .interpolation import ParticleGridMap
@@ -127,7 +129,7 @@ class CouplingBridge:
         self._rotational_coefficient = np.pi * case.gas.viscosity * p.equivalent_diameter ** 3
         self.substeps = max(1, round(case.gas.cfd_step / case.time.dem_step))
         self.semi_implicit = cfg.drag_treatment == "semi-implicit"
-        self.dem.implicit_drag = self.semi_implicit and not self.fixed
+        self._inputs = CouplingInputs.zeros(dem.particles.count)  # the DEM's coupling inputs: the bridge's buffers
         self.mesh = gas.mesh
         self.last: dict = {"drag_force": np.zeros(3), "pressure_force": np.zeros(3), "momentum_returned": 0.0}
         if cfg.two_way:
@@ -197,8 +199,10 @@ class CouplingBridge:
         at_particles = grid_map.gather(np.column_stack(fields))  # one pass for both
         # u at the particles, and -V_p grad p (+ V_p G, an imposed mean gradient acting on both phases)
         # + lift + explicit drag held over the interval, written straight into the particles' rows
-        fluid_velocity = np.empty((n, 3)) if self.fixed else p.fluid_velocity
-        external = np.empty((n, 3)) if self.fixed else p.external_force
+        inputs = self._inputs
+        if len(inputs.fluid_velocity) != n:
+            inputs = self._inputs = CouplingInputs.zeros(n)
+        fluid_velocity, external = inputs.fluid_velocity, inputs.external_force
         pressure_force = particle_forces(at_particles, bool(cfg.pressure_gradient_force), p.radius, p.half_length,
                                          np.asarray(gas.mean_pressure_gradient, float),
                                          _NO_LIFT if lift is None else lift,
@@ -206,13 +210,13 @@ class CouplingBridge:
         if self.fixed:  # nothing moves: the particles receive the drag at the new gas velocity
             impulse = None if explicit_drag is not None else c[:, None] * fluid_velocity * dt
         else:
-            p.external_torque[:] = 0.0 if torque is None else torque
+            inputs.external_torque[:] = 0.0 if torque is None else torque
             if self.rotational_drag:
-                p.external_torque += rotational_drag_torque(p.angular_velocity, p.inertia[:, 0],
-                                                            self._rotational_coefficient, dt)
-            p.drag_coefficient[:] = c if self.semi_implicit else 0.0
+                inputs.external_torque += rotational_drag_torque(p.angular_velocity, p.inertia[:, 0],
+                                                                 self._rotational_coefficient, dt)
+            inputs.drag_coefficient = c if self.semi_implicit else None
             t_dem = clock()
-            applied = dem.coupled_step(self.substeps)  # in the particles' order of this interval
+            applied = dem.coupled_step(self.substeps, inputs)  # in the particles' order of this interval
             t_after_gas += clock() - t_dem  # the DEM times itself
             # explicit: the held force is what both sides exchanged; semi-implicit: what the kicks applied
             impulse = None if explicit_drag is not None else applied

@@ -4,14 +4,14 @@ uses of one. Today there is one backend, ``cpu``: ``DEMSystem``, numba kernels o
 The interface (``DEMBackend``) is what the model, the coupling bridge, the scenes and the run monitors
 touch of a DEM, and nothing else:
 
-- ``particles``: the host view of the particle arrays (``ParticleArrays``): positions, velocities,
-  orientations and colours the observables and writers read, and the coupling inputs the bridge writes
-  before a coupled step (``drag_coefficient``, ``fluid_velocity``, ``external_force``, ``external_torque``).
-  A backend that keeps its arrays elsewhere (a GPU) copies them here when asked.
-- ``implicit_drag`` (bool, set by the bridge): the kicks integrate ``drag_coefficient (fluid_velocity - v)``.
-- ``coupled_step(steps)``: steps with those inputs and returns the drag impulse the kicks applied (N, 3),
-  in the particles' order at the call; a backend that re-sorts its particles (the CPU one does, by cell)
-  keeps that to itself.
+- ``particles``: the host view of the particle arrays (``ParticleArrays``), read-only outside the DEM:
+  positions, velocities, orientations and colours the observables and writers read, and the coupling inputs
+  the DEM holds (those of the last coupled step). A backend that keeps its arrays elsewhere (a GPU) copies
+  them here when asked.
+- ``coupled_step(steps, inputs)``: ``steps`` steps with the coupling inputs (``CouplingInputs``: arrays the
+  caller owns, in the host view's order at the call, copied in) held over them; returns the drag impulse
+  the kicks applied (N, 3), in that same order. A backend that re-sorts its particles (the CPU one does, by
+  cell) keeps that to itself.
 - ``step(steps)``, ``step_count``, ``time``, ``dt``, ``gravity``, ``box``.
 - ``diagnostics()`` (scalars: kinetic energy, largest overlap, contacts, speeds), ``rebuild_count``,
   ``check_health()`` (``SimulationError`` with the cause), ``timings`` (``fvdem.timing.Timings``, shared
@@ -22,7 +22,34 @@ Add one: docs/ARCHITECTURE.md, "Add a DEM backend".
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Callable, Protocol, runtime_checkable
+
+import numpy as np
+
+
+@dataclass
+class CouplingInputs:
+    """What the gas hands the particles for one coupled step, per particle in the order of the DEM's host
+    view at the call. The caller (the coupling bridge) owns the arrays; the DEM copies them in.
+
+    - ``drag_coefficient`` (N,) [kg/s], or ``None``: the kicks integrate the drag ``c (u - v)`` implicitly
+      (backward Euler, stable for any step) and return its impulse; ``None``: no drag in the kicks (an
+      explicit drag is then part of ``external_force``).
+    - ``fluid_velocity`` (N, 3) [m/s]: ``u`` of the drag.
+    - ``external_force`` (N, 3) [N], ``external_torque`` (N, 3) [N m]: held over the steps (pressure
+      gradient, lift, explicit drag; hydrodynamic torque).
+    """
+
+    drag_coefficient: np.ndarray | None
+    fluid_velocity: np.ndarray
+    external_force: np.ndarray
+    external_torque: np.ndarray
+
+    @classmethod
+    def zeros(cls, count: int) -> "CouplingInputs":
+        """Buffers for ``count`` particles, all zero (an implicit drag of coefficient 0)."""
+        return cls(np.zeros(count), np.zeros((count, 3)), np.zeros((count, 3)), np.zeros((count, 3)))
 
 
 @runtime_checkable
@@ -30,13 +57,12 @@ class DEMBackend(Protocol):
     """What fvdem uses of a DEM (see the module docstring)."""
 
     particles: object
-    implicit_drag: bool
     dt: float
     step_count: int
     rebuild_count: int
 
     def step(self, steps: int = 1) -> None: ...
-    def coupled_step(self, steps: int): ...
+    def coupled_step(self, steps: int, inputs: CouplingInputs): ...
     def diagnostics(self) -> dict: ...
     def check_health(self) -> None: ...
     def state(self) -> dict: ...
@@ -73,4 +99,4 @@ def _cpu(particles, box, contact, dt, gravity, skin):
 
 register_backend("cpu", _cpu, "numba kernels on the host's cores (DEMSystem; struct-of-arrays, race-free blocks)")
 
-__all__ = ["DEMBackend", "BACKENDS", "register_backend", "backend_names", "describe_backends", "build_backend"]
+__all__ = ["CouplingInputs", "DEMBackend", "BACKENDS", "register_backend", "backend_names", "describe_backends", "build_backend"]

@@ -125,7 +125,7 @@ class DEMSystem:
         except ValueError as exc:
             raise SimulationError(str(exc)) from None
         self.track_orientation = bool(np.any(particles.half_length > 0.0))
-        self.implicit_drag = False  # set by the coupling bridge: kicks integrate particles.drag_coefficient
+        self.implicit_drag = False  # the kicks integrate particles.drag_coefficient (set by coupled_step's inputs)
         self._uniform = self._pair_constants(particles)
         self.step_count = 0
         self.rebuild_count = 0
@@ -219,12 +219,17 @@ class DEMSystem:
         self.timings.add("neighbour_list", neighbours)
         self.timings.add("contact_forces", forces)
 
-    def coupled_step(self, steps: int) -> np.ndarray:
-        """``step(steps)`` with the coupling inputs the bridge wrote into ``particles`` (``drag_coefficient``,
-        ``fluid_velocity``, ``external_force``, ``external_torque``, in the particles' order at the call);
-        returns the drag impulse [N s] (N, 3) the kicks applied over the steps, in that same order. The
-        DEM re-sorts its particles by cell when it rebuilds its neighbour list; that stays inside it."""
+    def coupled_step(self, steps: int, inputs) -> np.ndarray:
+        """``step(steps)`` with the coupling inputs (``backends.CouplingInputs``, in the particles' order at the
+        call) copied into the particles' rows and held over the steps; returns the drag impulse [N s] (N, 3)
+        the kicks applied over the steps, in that same order. The DEM re-sorts its particles by cell when it
+        rebuilds its neighbour list (the inputs move with them); that stays inside it."""
         p = self.particles
+        self.implicit_drag = inputs.drag_coefficient is not None
+        p.drag_coefficient[:] = inputs.drag_coefficient if self.implicit_drag else 0.0
+        p.fluid_velocity[:] = inputs.fluid_velocity
+        p.external_force[:] = inputs.external_force
+        p.external_torque[:] = inputs.external_torque
         p.drag_impulse[:] = 0.0
         ids_before = p.ids.copy()
         self.step(steps)
