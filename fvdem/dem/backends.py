@@ -99,4 +99,5 @@ def _cpu(particles, box, contact, dt, gravity, skin):
 
 register_backend("cpu", _cpu, "numba kernels on the host's cores (DEMSystem; struct-of-arrays, race-free blocks)")
 
-__all__ = ["CouplingInputs", "DEMBackend", "BACKENDS", "register_backend", "backend_names", "describe_backends", "build_backend"]
+__all__ = ["CouplingInputs", "DEMBackend", "BACKENDS", "register_backend", "backend_names", "describe_backends",
+           "build_backend"]
