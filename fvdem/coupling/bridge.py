@@ -198,7 +198,7 @@ class CouplingBridge:
         fields = [gas.flux_velocity()] + ([gas.pressure_gradient()] if cfg.pressure_gradient_force else [])
         at_particles = grid_map.gather(np.column_stack(fields))  # one pass for both
         # u at the particles, and -V_p grad p (+ V_p G, an imposed mean gradient acting on both phases)
-        # + lift + explicit drag held over the interval, written straight into the particles' rows
+        # + lift + explicit drag held over the interval, written into the bridge's buffers for the DEM
         inputs = self._inputs
         if len(inputs.fluid_velocity) != n:
             inputs = self._inputs = CouplingInputs.zeros(n)
