@@ -317,7 +317,6 @@ class DEMSystem:
         self._blocks = contact_blocks(self.row_start, self.neighbours, self._cell_of,
                                       int(self._n_cells[0] * self._n_cells[1]), self.cell_span, CONTACT_BLOCKS)
 
-
     # ------------------------------------------------------------------ diagnostics
     def diagnostics(self) -> dict:
         """Scalar diagnostics of the current state (all floats, SI)."""
