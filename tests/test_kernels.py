@@ -131,10 +131,12 @@ def grid_weights(n, cells, width, seed=5):
     return index, weights
 
 
-def reference_scatter(values, cells, weights, count):
+def reference_scatter(values, cells, weights, count, counts=None):
+    """The deposition of row i's first ``counts[i]`` entries (all when ``counts`` is None)."""
     out = np.zeros((count, values.shape[1]))
     for k in range(cells.shape[1]):
-        np.add.at(out, cells[:, k], weights[:, k, None] * values)
+        used = weights[:, k] if counts is None else np.where(k < counts, weights[:, k], 0.0)
+        np.add.at(out, cells[:, k], used[:, None] * values)
     return out
 
 
@@ -154,9 +156,10 @@ def on_each_thread_count(run):
 @pytest.mark.parametrize("n", [3, 1000])
 def test_parallel_scatter_equals_serial_sum_and_is_thread_count_independent(n):
     cells, weights = grid_weights(n, 50, 8)
+    counts = np.random.default_rng(2).integers(0, 9, n).astype(np.int32)  # rows of any length up to the width
     values = np.random.default_rng(1).normal(size=(n, 3))
-    expected = reference_scatter(values, cells, weights, 50)
-    results = on_each_thread_count(lambda: scatter(values, cells, weights, np.zeros((50, 3))))
+    expected = reference_scatter(values, cells, weights, 50, counts)
+    results = on_each_thread_count(lambda: scatter(values, cells, weights, counts, np.zeros((50, 3))))
     assert_close(results[0], expected)
     for other in results[1:]:
         assert np.array_equal(other, results[0])  # bit for bit whatever the threads
@@ -183,7 +186,7 @@ def test_exchange_terms_equal_numpy_response_and_deposition():
     for lift_in, source_ref in ((lift, source_expected),
                                 (np.zeros((0, 3)), reference_scatter(exchanged + lift, cells, weights, count))):
         beta, source = kernels.exchange_terms(mass, c, velocity, force, gravity, lift_in, h, substeps, dt, cells,
-                                              weights, np.zeros(count), np.zeros((count, 3)))
+                                              weights, np.full(n, 8, np.int32), np.zeros(count), np.zeros((count, 3)))
         assert_close(beta, beta_expected)
         assert_close(source, source_ref)
 

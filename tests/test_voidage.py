@@ -37,3 +37,25 @@ def test_a_rod_crossing_a_face_changes_the_voidage_by_at_most_the_method_bound(m
         previous = eps
     assert largest <= bound * (1 + 1e-9)
     assert largest > 0.9 * bound  # the bound is reached: it is the method's real jump
+
+
+@pytest.mark.parametrize("method", ["centroid", "divided", "trilinear"])
+def test_a_given_map_is_used_only_when_its_weights_are_the_methods(method):
+    """``voidage(..., grid_map=...)``: the bridge's trilinear map of 5 points serves the trilinear method; the
+    others build their own (the same voidage as without a map), and a map of their own, refreshed in place
+    after the rods moved, gives what a new one gives."""
+    from fvdem.coupling.interpolation import ParticleGridMap
+    from fvdem.coupling.voidage import METHODS
+    rng = np.random.default_rng(4)
+    n = 3000
+    rods = ParticleArrays.create(rng.uniform([0, 0, 0], [0.15, 0.15, 0.3], size=(n, 3)), 1.5e-3, 4.5e-3, 1442.0,
+                                 axis=rng.normal(size=(n, 3)))
+    bridge_map = ParticleGridMap(MESH, rods, "trilinear", 5)
+    m = METHODS[method]
+    assert bridge_map.fits(m.weights, m.points(5), rods) == (method == "trilinear")
+    expected, _ = voidage(rods, MESH, method, minimum=0.0)
+    np.testing.assert_array_equal(voidage(rods, MESH, method, minimum=0.0, grid_map=bridge_map)[0], expected)
+    own = ParticleGridMap(MESH, rods, m.weights, m.points(5))
+    rods.position += rng.uniform(-0.01, 0.01, (n, 3))
+    moved, _ = voidage(rods, MESH, method, minimum=0.0)
+    np.testing.assert_array_equal(voidage(rods, MESH, method, minimum=0.0, grid_map=own.refresh(rods))[0], moved)

@@ -45,6 +45,7 @@ from ..errors import SimulationError
 from . import closures
 from .interpolation import ParticleGridMap
 from .kernels import column_sums, exchange_terms, particle_forces, slip_at_particles
+from .voidage import METHODS as VOIDAGE_METHODS
 from .voidage import voidage as map_voidage
 
 
@@ -132,16 +133,31 @@ class CouplingBridge:
         self._inputs = CouplingInputs.zeros(dem.particles.count)  # the DEM's coupling inputs: the bridge's buffers
         self.mesh = gas.mesh
         self.last: dict = {"drag_force": np.zeros(3), "pressure_force": np.zeros(3), "momentum_returned": 0.0}
+        self._map: ParticleGridMap | None = None  # refreshed in place each interval
+        self._voidage_map: ParticleGridMap | None = None  # the voidage method's, where its weights differ
         if cfg.two_way:
             eps = self._voidage(self._grid_map())
             gas.set_voidage(eps, previous=eps)
 
     # ------------------------------------------------------------------ pieces
     def _grid_map(self) -> ParticleGridMap:
-        return ParticleGridMap(self.mesh, self.dem.particles, "trilinear", self.config.satellites)
+        if self._map is None:
+            self._map = ParticleGridMap(self.mesh, self.dem.particles, "trilinear", self.config.satellites)
+            return self._map
+        return self._map.refresh(self.dem.particles)
 
     def _voidage(self, grid_map):
+        """The cells' voidage by the case's method, through ``grid_map`` where the method's weights are the
+        bridge's (trilinear, satellites), else through a map of its own, refreshed in place like it."""
         cfg = self.config
+        method = VOIDAGE_METHODS[cfg.voidage]
+        points = method.points(cfg.satellites)
+        if not grid_map.fits(method.weights, points, self.dem.particles):
+            if self._voidage_map is None or not self._voidage_map.fits(method.weights, points, self.dem.particles):
+                self._voidage_map = ParticleGridMap(self.mesh, self.dem.particles, method.weights, points)
+            else:
+                self._voidage_map.refresh(self.dem.particles)
+            grid_map = self._voidage_map
         eps, over_packed = map_voidage(self.dem.particles, self.mesh, cfg.voidage, cfg.satellites,
                                        cfg.minimum_voidage, grid_map=grid_map)
         self.last["over_packed_cells"] = over_packed
@@ -189,7 +205,8 @@ class CouplingBridge:
                 beta, source = exchange_terms(p.mass, c, p.velocity, p.contact_force + p.external_force,
                                               np.asarray(dem.gravity, float), _NO_LIFT if lift is None else lift,
                                               dem.dt, self.substeps, dt, grid_map.cells, grid_map.weights,
-                                              np.zeros(mesh.cell_count), np.zeros((mesh.cell_count, 3)))
+                                              grid_map.counts, np.zeros(mesh.cell_count),
+                                              np.zeros((mesh.cell_count, 3)))
                 deposited += clock() - t
             gas.set_exchange(beta / mesh.cell_volumes, source / volume_cells)
         t_gas = clock()

@@ -135,12 +135,13 @@ def reynolds_loop(slip, voidage, shape, out):
 
 # --------------------------------------------------------------------------- the semi-implicit exchange
 @njit(cache=True, parallel=True)
-def exchange_terms(mass, c, velocity, force, gravity, lift, substep, substeps, dt, cells, weights,
+def exchange_terms(mass, c, velocity, force, gravity, lift, substep, substeps, dt, cells, weights, counts,
                    beta_out, source_out):
     """The bridge's semi-implicit exchange, per particle and deposited in one pass (``bridge`` step 3):
     ``R = (1 + h c / 2m)^(-2n)``, ``k = (1 - R) m / (c dt) - 1`` (0 where c = 0), coefficient
     ``m (1 - R) / dt``, exchanged momentum rate ``coefficient v - m k a - F_L`` with ``a = F / m + g``
-    (``F`` contact + external force); their interpolation-weighted sums go to ``beta_out`` (C,) and
+    (``F`` contact + external force); their interpolation-weighted sums (row i's ``counts[i]`` cells and
+    weights, ``interpolation.particle_weights``) go to ``beta_out`` (C,) and
     ``source_out`` (C, 3) (not yet divided by the cell volumes). ``lift`` may be (0, 3): none.
     Race-free like ``interpolation.scatter``: fixed particle blocks into private copies, added in
     block order."""
@@ -165,14 +166,13 @@ def exchange_terms(mass, c, velocity, force, gravity, lift, substep, substeps, d
                 e0 -= lift[i, 0]
                 e1 -= lift[i, 1]
                 e2 -= lift[i, 2]
-            for j in range(cells.shape[1]):
+            for j in range(counts[i]):
                 w = weights[i, j]
-                if w != 0.0:
-                    cell = cells[i, j]
-                    block[cell, 0] += w * coefficient
-                    block[cell, 1] += w * e0
-                    block[cell, 2] += w * e1
-                    block[cell, 3] += w * e2
+                cell = cells[i, j]
+                block[cell, 0] += w * coefficient
+                block[cell, 1] += w * e0
+                block[cell, 2] += w * e1
+                block[cell, 3] += w * e2
     for cell in numba.prange(ncell):
         for chunk in range(chunks):
             beta_out[cell] += partial[chunk, cell, 0]

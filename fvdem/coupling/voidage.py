@@ -78,15 +78,15 @@ register_voidage("trilinear", weights="trilinear", satellites=True,
 def voidage(particles, mesh, method="divided", satellites=5, minimum=0.2, grid_map=None):
     """Gas volume fraction per cell and the number of over-packed cells (solid fraction above
     ``1 - minimum``, clipped to ``minimum``: a diagnostic that the grid is too fine for the particles).
-    ``grid_map``: the trilinear ``ParticleGridMap`` of ``satellites`` points of the current
-    configuration, if already built (reused by methods with those weights and points)."""
+    ``grid_map``: a ``ParticleGridMap`` of the current configuration, if already built (used when its
+    weights and points are the method's, else a map is built)."""
     try:
         m = METHODS[method]
     except KeyError:
         raise ValueError(f"voidage method {method!r}: expected one of {voidage_names()}") from None
     from ..dem.particles import spherocylinder_volume
     volume = spherocylinder_volume(particles.radius, particles.half_length)
-    if grid_map is None or m.weights != "trilinear" or not m.satellites:
+    if grid_map is None or not grid_map.fits(m.weights, m.points(satellites), particles):
         grid_map = ParticleGridMap(mesh, particles, m.weights, m.points(satellites))
     eps = 1.0 - grid_map.scatter(volume) / mesh.cell_volumes
     return np.maximum(eps, minimum), int(np.count_nonzero(eps < minimum))
