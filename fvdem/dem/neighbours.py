@@ -1,10 +1,10 @@
 """O(N) neighbour search: particles sorted by cell, half Verlet lists with a skin.
 
 A pair (i, j), i < j, is listed in row i when the shortest distance between the axis segments
-is below ``r_i + r_j + skin``. Because every point of a segment moves by at most
-``|dx| + h |d axis|`` (centre displacement plus half length times the change of the unit axis),
-the list stays complete until some particle's end points have moved by more than ``skin / 2``;
-the integrator tracks that bound and asks for a rebuild.
+is below ``r_i + r_j + skin``. Every point of a segment moves by at most as much as one of its end
+points, ``max |dx +- h d axis|`` (centre displacement, half length, change of the unit axis), so the
+list stays complete until some particle's end points have moved by more than ``skin / 2``; the
+integrator tracks that bound and asks for a rebuild.
 
 The list is stored compactly (CSR): row i's partners are ``neighbours[row_start[i]:row_start[i+1]]``
 (int32), and a pair's slot is its position in that flat array. Compact rows matter: with padded

@@ -2,8 +2,9 @@
 
 Every particle is a spherocylinder: a cylinder of radius ``radius`` and length
 ``2 * half_length`` capped by two hemispheres. A sphere is the special case
-``half_length == 0``. The body frame has the symmetry axis along its z axis;
-the orientation quaternion ``quaternion = (w, x, y, z)`` maps body to world.
+``half_length == 0``. The body frame has the symmetry axis along its z axis; the
+orientation is the world-frame ``axis`` alone (the spin about it has no effect on an
+axisymmetric body; ``ParticleArrays.quaternion`` derives a body-to-world quaternion).
 
 All quantities in SI units.
 """
@@ -73,17 +74,19 @@ def axis_from_quaternion(quaternion):
 
 def quaternion_from_axis(axis):
     """Unit quaternions ``(N, 4)`` that rotate body z onto unit vectors ``axis (N, 3)``
-    (the shortest rotation; spin about the axis is irrelevant for axisymmetric bodies)."""
+    (spin about the axis is irrelevant for axisymmetric bodies). Upper hemisphere: the shortest rotation,
+    ``(1 + a_z, -a_y, a_x, 0)`` normalised; lower one: a half turn about x (e_z onto -e_z) followed by the
+    shortest rotation from -e_z, ``(-a_y, 1 - a_z, 0, a_x)`` normalised. No ``1 + a_z`` near a_z = -1,
+    so the axis read back is exact to round-off everywhere."""
     axis = np.asarray(axis, dtype=FLOAT)
     axis = axis / np.linalg.norm(axis, axis=1, keepdims=True)
+    ax, ay, az = axis.T
+    upper = az >= 0.0
     q = np.empty((len(axis), 4), dtype=FLOAT)
-    # rotation of e_z onto a: q = (1 + a_z, -a_y, a_x, 0) normalised (cross e_z x a = (-a_y, a_x, 0))
-    q[:, 0] = 1.0 + axis[:, 2]
-    q[:, 1] = -axis[:, 1]
-    q[:, 2] = axis[:, 0]
-    q[:, 3] = 0.0
-    anti = q[:, 0] < 1e-12  # axis == -e_z: rotate pi about x
-    q[anti] = (0.0, 1.0, 0.0, 0.0)
+    q[:, 0] = np.where(upper, 1.0 + az, -ay)
+    q[:, 1] = np.where(upper, -ay, 1.0 - az)
+    q[:, 2] = np.where(upper, ax, 0.0)
+    q[:, 3] = np.where(upper, 0.0, ax)
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     return q
 
@@ -96,7 +99,8 @@ class ParticleArrays:
         position (N,3) [m]; velocity (N,3) [m/s];
         angular_momentum (N,3) [kg m^2/s], world frame (the integrated rotational state);
         angular_velocity (N,3) [rad/s], world frame, derived from angular_momentum and orientation;
-        quaternion (N,4) body-to-world, (w, x, y, z); axis (N,3) world-frame symmetry axis;
+        axis (N,3) world-frame symmetry axis (unit vectors: the orientation of an axisymmetric body;
+        ``quaternion`` derives one);
         radius (N) [m]; half_length (N) [m] half the cylindrical part (0 for spheres);
         mass (N) [kg]; inertia (N,2) [kg m^2] (transverse, axial);
         colour (N) int32 tracer colour; ids (N) int64 stable particle id;
@@ -113,7 +117,6 @@ class ParticleArrays:
     velocity: np.ndarray
     angular_momentum: np.ndarray
     angular_velocity: np.ndarray
-    quaternion: np.ndarray
     axis: np.ndarray
     radius: np.ndarray
     half_length: np.ndarray
@@ -133,6 +136,13 @@ class ParticleArrays:
     def count(self) -> int:
         return len(self.mass)
 
+    @property
+    def quaternion(self) -> np.ndarray:
+        """Body-to-world unit quaternions ``(N, 4)``, ``(w, x, y, z)``, of the axes: the shortest rotation of
+        body z onto each axis (``quaternion_from_axis``). The spin about the axis is not tracked (it has no
+        effect on an axisymmetric body), so this is one orientation of each particle, not its history."""
+        return quaternion_from_axis(self.axis)
+
     @classmethod
     def create(cls, position, radius, half_length, density, axis=None, colour=None, velocity=None):
         """Allocate arrays for particles at ``position`` with given shape and density [kg/m^3]. The
@@ -143,7 +153,8 @@ class ParticleArrays:
         half_length = np.broadcast_to(np.asarray(half_length, dtype=FLOAT), (n,)).copy()
         if axis is None:
             axis = np.tile(np.array([0.0, 0.0, 1.0]), (n, 1))
-        quaternion = quaternion_from_axis(axis)
+        axis = np.array(axis, dtype=FLOAT, ndmin=2)
+        axis = np.array(np.broadcast_to(axis / np.linalg.norm(axis, axis=1, keepdims=True), (n, 3)), order="C")
         transverse, axial = spherocylinder_inertia(radius, half_length, density)
         zeros3 = lambda: np.zeros((n, 3), dtype=FLOAT)  # noqa: E731
         return cls(
@@ -151,8 +162,7 @@ class ParticleArrays:
             velocity=zeros3() if velocity is None else np.array(velocity, dtype=FLOAT, order="C", copy=True),
             angular_momentum=zeros3(),
             angular_velocity=zeros3(),
-            quaternion=quaternion,
-            axis=axis_from_quaternion(quaternion),
+            axis=axis,
             radius=radius,
             half_length=half_length,
             mass=density * spherocylinder_volume(radius, half_length),

@@ -195,7 +195,7 @@ class DEMSystem:
         for k in range(steps):
             p = self.particles
             t0 = perf_counter()
-            kick_drift(p.position, p.velocity, p.angular_momentum, p.angular_velocity, p.quaternion, p.axis,
+            kick_drift(p.position, p.velocity, p.angular_momentum, p.angular_velocity, p.axis,
                        p.half_length, p.mass, p.inertia, p.contact_force, p.contact_torque, p.external_force,
                        p.external_torque, self.gravity, self.dt, self.reference_position, self.reference_axis,
                        self.displacement, self.track_orientation, p.drag_coefficient, p.fluid_velocity,
