@@ -47,3 +47,20 @@ def test_a_tool_runs_from_a_fresh_clone_in_its_quick_mode(tool, fresh):
         return
     assert result.returncode == 0, result.stderr[-3000:]
     assert isinstance(json.loads(result.stdout.strip().splitlines()[-1]), dict)
+
+
+@pytest.mark.slow
+def test_the_fluidized_benchmark_breaks_the_coupled_step_into_its_phases(fresh):
+    """``bench_fluidized.py --coupled``: per shape the coupled step per simulated second and its timed phases
+    per CFD step (after the quick beds of the test above), the DEM's and the bridge's all there and positive."""
+    work, beds = fresh
+    env = dict(os.environ, FVDEM_BEDS_DIR=str(beds), NUMBA_NUM_THREADS="1")
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / "bench_fluidized.py"), "--quick", "--coupled",
+                             "--json"], capture_output=True, text=True, timeout=600, cwd=work, env=env)
+    assert result.returncode == 0, result.stderr[-3000:]
+    out = json.loads(result.stdout.strip().splitlines()[-1])
+    for shape in ("ar1", "ar4"):
+        phases = out["shapes"][shape]["coupled_ms_per_cfd_step"]
+        for phase in ("neighbour_list", "contact_forces", "integration", "voidage_mapping", "closures", "deposition"):
+            assert phases[phase] > 0.0, (shape, phase, phases)
+        assert out["shapes"][shape]["coupled_wall_seconds_per_simulated_second"] > 0.0

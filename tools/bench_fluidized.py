@@ -15,14 +15,17 @@ lift and torque held): the neighbour list, the contact forces and the integratio
 the DEM's own phase timers. The shapes alternate (rods, spheres, spheres, rods, ...) in one process, each
 round from a fresh copy of the state, so both see the same machine; the figures are medians over
 ``--rounds``. ``--coupled`` adds the coupled step (gas, bridge and DEM) over ``--cfd-steps`` CFD steps
-from the same checkpoint, per simulated second.
+from the same checkpoint, per simulated second, and its timed phases (the DEM's, the gas's and the
+bridge's voidage mapping, closures and deposition) in ms per CFD step.
 
 Compare builds ABA (``PYTHONPATH`` pointing at each build's checkout, this file from either): only ratios
 measured in one run mean anything (docs/benchmarks.md). ``--quick``: the 1,500-particle beds fluidized
 for 0.02 s, a few steps, one round (seconds; the test suite runs it). The last line of output is JSON:
 
     {"shapes": {"ar1": {"ns_per_particle_step": {"neighbour_list": .., "contact_forces": .., "integration": ..,
-                         "dem": ..}, "rounds": [...], "listed_pairs_per_particle": .., ...}, "ar4": {...}},
+                         "dem": ..}, "rounds": [...], "listed_pairs_per_particle": .., ...,
+                 "coupled_wall_seconds_per_simulated_second": .., "coupled_ms_per_cfd_step": {"closures": .., ...}},
+              "ar4": {...}},
      "rods_over_spheres": {"neighbour_list": .., "contact_forces": .., "integration": .., "dem": ..},
      "machine": {...}}
 """
@@ -94,13 +97,18 @@ def measure_dem(case, arrays, steps: int) -> dict:
     return result
 
 
-def measure_coupled(case, arrays, cfd_steps: int) -> float:
-    """Wall seconds per simulated second of the coupled step from the checkpoint."""
+def measure_coupled(case, arrays, cfd_steps: int) -> tuple:
+    """Wall seconds per simulated second of the coupled step from the checkpoint, and the run's timed phases
+    (``fvdem.timing.PHASES``: the DEM's, the gas's, the bridge's voidage mapping, closures and deposition)
+    in ms per CFD step."""
     from fvdem.model import Model
     model = Model(case, {k: v.copy() for k, v in arrays.items()})
+    before = dict(model.timings.seconds)
     wall = time.perf_counter()
     model.advance(cfd_steps)
-    return (time.perf_counter() - wall) / (cfd_steps * model.time_step)
+    wall = time.perf_counter() - wall
+    phases = {k: 1e3 * (v - before.get(k, 0.0)) / cfd_steps for k, v in model.timings.seconds.items()}
+    return wall / (cfd_steps * model.time_step), phases
 
 
 def main(argv=None) -> int:
@@ -154,8 +162,10 @@ def main(argv=None) -> int:
             "contacts_per_particle": median["contacts_per_particle"],
             "rounds": rounds[name]}
         if args.coupled:
-            shapes[name]["coupled_wall_seconds_per_simulated_second"] = float(np.median(coupled[name]))
-            shapes[name]["coupled_rounds"] = coupled[name]
+            shapes[name]["coupled_wall_seconds_per_simulated_second"] = float(np.median([c[0] for c in coupled[name]]))
+            shapes[name]["coupled_ms_per_cfd_step"] = {k: float(np.median([c[1][k] for c in coupled[name]]))
+                                                       for k in coupled[name][0][1]}
+            shapes[name]["coupled_rounds"] = [c[0] for c in coupled[name]]
     ratios = {k: shapes["ar4"]["ns_per_particle_step"][k] / shapes["ar1"]["ns_per_particle_step"][k]
               for k in (*PHASES, "dem")}
     import fvdem
