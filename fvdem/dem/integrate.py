@@ -87,8 +87,8 @@ def _rotate(i, lx, ly, lz, axis, angular_velocity, reference_axis, half_length, 
     ``c = cos x``, ``v = L k sin x / x`` of the half angle ``x = |L| k``, ``k = dt / (2 I_t)`` (the half
     angle enters as x^2, ``half_angle_terms``: no |L| needed), as ``a + 2 c (v x a) + 2 v x (v x a)``; then
     one Newton step ``a (3 - |a|^2) / 2`` holds ``|a| = 1`` to round-off. A quaternion of the whole
-    orientation (precession and spin, renormalised, the axis read back from it) cost 38 ns per rod and
-    drift, this about half (docs/benchmarks.md)."""
+    orientation (precession and spin, renormalised, the axis read back from it) made the fluidized rods'
+    ``kick_drift`` cost 57-58 ns per rod against 40-41 now (docs/benchmarks.md)."""
     inv_t = 1.0 / inertia[i, 0]
     inv_a = 1.0 / inertia[i, 1]
     k = half_dt * inv_t
