@@ -138,9 +138,9 @@ class ParticleArrays:
 
     @property
     def quaternion(self) -> np.ndarray:
-        """Body-to-world unit quaternions ``(N, 4)``, ``(w, x, y, z)``, of the axes: the shortest rotation of
-        body z onto each axis (``quaternion_from_axis``). The spin about the axis is not tracked (it has no
-        effect on an axisymmetric body), so this is one orientation of each particle, not its history."""
+        """Body-to-world unit quaternions ``(N, 4)``, ``(w, x, y, z)``, that turn body z onto each axis
+        (``quaternion_from_axis``). The spin about the axis is not tracked (it has no effect on an
+        axisymmetric body), so this is one orientation of each particle, not its history."""
         return quaternion_from_axis(self.axis)
 
     @classmethod
