@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _beds import ROOT, fluidized_states
+from _beds import fluidized_states
 
 PHASES = ("neighbour_list", "contact_forces", "integration")
 SHAPES = ("ar4", "ar1")  # rods first: the order alternates round by round
