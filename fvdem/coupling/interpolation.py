@@ -17,16 +17,16 @@ NEAREST, TRILINEAR = 0, 1
 @njit(cache=True)
 def trilinear(field, points, first_centre, spacing, shape, periodic, out):
     """Interpolate ``field`` (C, k) given in FiPy cell order (x fastest) to ``points`` (N, 3) into
-    ``out`` (N, k), with the 8 cell/weight pairs of ``_point_weights``."""
+    ``out`` (N, k), with the (up to 8) cell/weight pairs of ``_point_weights``."""
     k = field.shape[1]
     cells = np.empty((1, 8), np.int64)
     weights = np.empty((1, 8))
     for p in range(points.shape[0]):
-        _point_weights(points[p, 0], points[p, 1], points[p, 2], 1.0, TRILINEAR, first_centre, spacing, shape,
-                       periodic, cells, weights, 0, 0)
+        used = _point_weights(points[p, 0], points[p, 1], points[p, 2], 1.0, TRILINEAR, first_centre, spacing,
+                              shape, periodic, cells, weights, 0, 0)
         for c in range(k):
             total = 0.0
-            for j in range(8):
+            for j in range(used):
                 total += weights[0, j] * field[cells[0, j], c]
             out[p, c] = total
     return out
@@ -47,55 +47,11 @@ def interpolate(mesh, field, points):
 
 
 @njit(cache=True, inline="always")
-def _axis_weights(coordinate, first_centre, spacing, n, periodic, kernel):
-    """Lower and upper cell index along one axis and the upper one's weight: the cell holding the
-    point (``NEAREST``; weight 0) or the two centres around it (``TRILINEAR``); beyond the outermost
-    centres of a walled axis the boundary cell alone (zero gradient), wrapped on a periodic one."""
-    t = (coordinate - first_centre) / spacing
-    if kernel == NEAREST:
-        c = int(np.floor(t + 0.5))
-        if periodic:
-            c %= n
-        else:
-            c = min(max(c, 0), n - 1)
-        return c, c, 0.0
-    i0 = int(np.floor(t))
-    if periodic:
-        return i0 % n, (i0 + 1) % n, t - i0
-    if i0 < 0:
-        return 0, 0, 0.0
-    if i0 >= n - 1:
-        return n - 1, n - 1, 0.0
-    return i0, i0 + 1, t - i0
-
-
-@njit(cache=True, inline="always")
-def _point_weights(x, y, z, share, kernel, first_centre, spacing, shape, periodic, cells, weights, row, start):
-    """Write the 8 (trilinear) or 1 (nearest cell) cell/weight pairs of one point into row ``row`` of
-    ``cells``/``weights`` from slot ``start``; returns the next free slot. Inlined, on whole arrays and
-    without allocation: it runs once per point per coupling step (a called function taking row views
-    cost ~50 ns per point in reference counting)."""
-    nx, ny = shape[0], shape[1]
-    lx, hx, wx = _axis_weights(x, first_centre[0], spacing[0], shape[0], periodic[0], kernel)
-    ly, hy, wy = _axis_weights(y, first_centre[1], spacing[1], shape[1], periodic[1], kernel)
-    lz, hz, wz = _axis_weights(z, first_centre[2], spacing[2], shape[2], periodic[2], kernel)
-    corners = 1 if kernel == NEAREST else 8
-    for corner in range(corners):
-        ix = hx if corner & 1 else lx
-        iy = hy if corner & 2 else ly
-        iz = hz if corner & 4 else lz
-        weight = ((wx if corner & 1 else 1.0 - wx) * (wy if corner & 2 else 1.0 - wy)
-                  * (wz if corner & 4 else 1.0 - wz))
-        cells[row, start] = ix + nx * (iy + ny * iz)
-        weights[row, start] = share * weight
-        start += 1
-    return start
-
-
-@njit(cache=True, inline="always")
 def _axis_span(coordinate, first_centre, spacing, n, periodic, kernel):
-    """``_axis_weights`` without the periodic wrap: lower and upper index (on a periodic axis they may lie
-    outside ``[0, n)``, to be wrapped by the caller) and the upper one's weight."""
+    """Lower and upper cell index along one axis and the upper one's weight: the cell holding the point
+    (``NEAREST``; weight 0) or the two centres around it (``TRILINEAR``); beyond the outermost centres of a
+    walled axis the boundary cell alone (zero gradient). On a periodic axis the indices are not wrapped:
+    they may lie outside ``[0, n)`` (``_axis_weights`` wraps them)."""
     t = (coordinate - first_centre) / spacing
     if kernel == NEAREST:
         c = int(np.floor(t + 0.5))
@@ -110,6 +66,39 @@ def _axis_span(coordinate, first_centre, spacing, n, periodic, kernel):
     if i0 >= n - 1:
         return n - 1, n - 1, 0.0
     return i0, i0 + 1, t - i0
+
+
+@njit(cache=True, inline="always")
+def _axis_weights(coordinate, first_centre, spacing, n, periodic, kernel):
+    """``_axis_span`` with the indices wrapped on a periodic axis."""
+    lo, hi, w = _axis_span(coordinate, first_centre, spacing, n, periodic, kernel)
+    if periodic:
+        return lo % n, hi % n, w
+    return lo, hi, w
+
+
+@njit(cache=True, inline="always")
+def _point_weights(x, y, z, share, kernel, first_centre, spacing, shape, periodic, cells, weights, row, start):
+    """Write the 8 (trilinear) or 1 (nearest cell) cell/weight pairs of one point into row ``row`` of
+    ``cells``/``weights`` from slot ``start``, in corner order, the zero weights left out without a branch
+    (a zero's slot is written and taken by the next pair; the row needs room for all 8); returns the next
+    free slot. Inlined, on whole arrays and without allocation: it runs once per point per coupling step (a
+    called function taking row views cost ~50 ns per point in reference counting)."""
+    nx, ny = shape[0], shape[1]
+    lx, hx, wx = _axis_weights(x, first_centre[0], spacing[0], shape[0], periodic[0], kernel)
+    ly, hy, wy = _axis_weights(y, first_centre[1], spacing[1], shape[1], periodic[1], kernel)
+    lz, hz, wz = _axis_weights(z, first_centre[2], spacing[2], shape[2], periodic[2], kernel)
+    corners = 1 if kernel == NEAREST else 8
+    for corner in range(corners):
+        ix = hx if corner & 1 else lx
+        iy = hy if corner & 2 else ly
+        iz = hz if corner & 4 else lz
+        weight = ((wx if corner & 1 else 1.0 - wx) * (wy if corner & 2 else 1.0 - wy)
+                  * (wz if corner & 4 else 1.0 - wz))
+        cells[row, start] = ix + nx * (iy + ny * iz)
+        weights[row, start] = share * weight
+        start += weight != 0.0
+    return start
 
 
 WEIGHT_CHUNKS = 64  # fixed particle blocks of ``particle_weights``, each with its own block of cells
@@ -148,19 +137,9 @@ def particle_weights(position, axis, radius, half_length, satellites, kernel, fi
             share = 1.0 / points
             px, py, pz = position[i, 0], position[i, 1], position[i, 2]
             ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
-            if points == 1:  # a sphere: its point's corners in order, the zeros dropped without a branch
-                lx, hx, wx = _axis_weights(px, first_centre[0], spacing[0], nx, periodic[0], kernel)
-                ly, hy, wy = _axis_weights(py, first_centre[1], spacing[1], ny, periodic[1], kernel)
-                lz, hz, wz = _axis_weights(pz, first_centre[2], spacing[2], nz, periodic[2], kernel)
-                count = 0
-                for corner in range(per_point):  # slot count <= corner: within the row
-                    weight = share * ((wx if corner & 1 else 1.0 - wx) * (wy if corner & 2 else 1.0 - wy)
-                                      * (wz if corner & 4 else 1.0 - wz))
-                    cells[i, count] = ((hx if corner & 1 else lx)
-                                       + nx * ((hy if corner & 2 else ly) + ny * (hz if corner & 4 else lz)))
-                    weights[i, count] = weight
-                    count += weight != 0.0
-                counts[i] = count
+            if points == 1:  # a sphere: its point's nonzero corners in order
+                counts[i] = _point_weights(px, py, pz, share, kernel, first_centre, spacing, shape, periodic, cells,
+                                           weights, i, 0)
                 continue
             if per_point == 1:  # nearest cells along a line: a point's cell is its predecessor's or a new one
                 count = 0
@@ -315,9 +294,8 @@ class ParticleGridMap:
 
     def fits(self, kernel: str, satellites: int, particles) -> bool:
         """Whether this map has ``kernel``'s weights and the points of ``satellites`` for ``particles``."""
-        points = satellites if np.any(particles.half_length > 0) else 1
-        mine = self.satellites if np.any(particles.half_length > 0) else 1
-        return ({"trilinear": TRILINEAR, "nearest": NEAREST}[kernel] == self.kernel and points == mine
+        same_points = satellites == self.satellites or not np.any(particles.half_length > 0)
+        return ({"trilinear": TRILINEAR, "nearest": NEAREST}[kernel] == self.kernel and same_points
                 and self.cells.shape[0] == particles.count)
 
     def refresh(self, particles) -> "ParticleGridMap":
