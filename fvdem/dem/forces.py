@@ -33,16 +33,11 @@ import math
 from numba import njit, prange
 
 from .contact_law import ZETA_N, ZETA_WALL, contact_force, kernel_constants, normal_damping
-from .geometry import minimum_image, segment_parameters
+from .geometry import cross, minimum_image, segment_parameters
 
 # fast-math without 'nnan'/'ninf': FMA contraction, reciprocals, reassociation; NaN and Inf still
 # propagate so a blown-up state is detected. Results stay deterministic for a given build.
 FASTMATH = {"contract", "arcp", "nsz", "afn", "reassoc"}
-
-
-@njit(cache=True, inline="always")
-def _cross(ax, ay, az, bx, by, bz):
-    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
 @njit(cache=True, inline="always")
@@ -137,8 +132,8 @@ def _pair_row(i, position, velocity, angular_velocity, axis, radius, half_length
         lix, liy, liz = s * ai0 - li * nx, s * ai1 - li * ny, s * ai2 - li * nz
         ljx, ljy, ljz = t * aj0 + lj * nx, t * aj1 + lj * ny, t * aj2 + lj * nz
         wj0, wj1, wj2 = angular_velocity[j, 0], angular_velocity[j, 1], angular_velocity[j, 2]
-        ci = _cross(wi0, wi1, wi2, lix, liy, liz)
-        cj = _cross(wj0, wj1, wj2, ljx, ljy, ljz)
+        ci = cross(wi0, wi1, wi2, lix, liy, liz)
+        cj = cross(wj0, wj1, wj2, ljx, ljy, ljz)
         vx = vix + ci[0] - velocity[j, 0] - cj[0]
         vy = viy + ci[1] - velocity[j, 1] - cj[1]
         vz = viz + ci[2] - velocity[j, 2] - cj[2]
@@ -146,8 +141,8 @@ def _pair_row(i, position, velocity, angular_velocity, axis, radius, half_length
         fx, fy, fz, trx, tr_y, trz, f_n = contact_force(
             history, slot, overlap, nx, ny, nz, vx, vy, vz,
             wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)
-        ti = _cross(lix, liy, liz, fx, fy, fz)
-        tj = _cross(ljx, ljy, ljz, -fx, -fy, -fz)
+        ti = cross(lix, liy, liz, fx, fy, fz)
+        tj = cross(ljx, ljy, ljz, -fx, -fy, -fz)
         sfx += fx
         sfy += fy
         sfz += fz
@@ -212,7 +207,7 @@ def _sphere_row(i, position, velocity, angular_velocity, radius, mass, inertia, 
             history, slot, overlap, nx, ny, nz, vx, vy, vz,
             wi0 - wj0, wi1 - wj1, wi2 - wj2, eta_n, r_eff, inertia_eff, law)
         # torques: (-l_i n) x F on i, (l_j n) x (-F) on j, both -l (n x F)
-        cx, cy, cz = _cross(nx, ny, nz, fx, fy, fz)
+        cx, cy, cz = cross(nx, ny, nz, fx, fy, fz)
         sfx += fx
         sfy += fy
         sfz += fz
@@ -289,7 +284,7 @@ def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_l
             nz = nd if d == 2 else 0.0
             lever = r - 0.5 * overlap
             lx, ly, lz = ex - lever * nx, ey - lever * ny, ez - lever * nz
-            c = _cross(angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2], lx, ly, lz)
+            c = cross(angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2], lx, ly, lz)
             vx = velocity[i, 0] + c[0]
             vy = velocity[i, 1] + c[1]
             vz = velocity[i, 2] + c[2]
@@ -300,7 +295,7 @@ def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_l
             fx += wfx
             fy += wfy
             fz += wfz
-            t = _cross(lx, ly, lz, wfx, wfy, wfz)
+            t = cross(lx, ly, lz, wfx, wfy, wfz)
             tx += t[0] + trx
             ty += t[1] + tr_y
             tz += t[2] + trz

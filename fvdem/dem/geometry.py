@@ -56,6 +56,12 @@ def segment_parameters(rx, ry, rz, a1x, a1y, a1z, h1, a2x, a2y, a2z, h2):
     return s, t
 
 
+@njit(cache=True, inline="always")
+def cross(ax, ay, az, bx, by, bz):
+    """The cross product ``a x b`` of two vectors given by their components."""
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+
+
 @njit(cache=True)
 def segment_distance(p1, a1, h1, p2, a2, h2):
     """Shortest distance [m] between two axis segments (for tests and diagnostics)."""

@@ -26,6 +26,8 @@ import math
 
 from numba import njit, prange
 
+from .geometry import cross
+
 
 # below this half angle [rad] the rotations use the series of cos x and sin x / x to x^6: the first term
 # left out, x^8 / 8!, is under 7e-19 there, below a rounding of 1 (a drift's half angle is |w| dt / 2:
@@ -42,12 +44,6 @@ def half_angle_terms(x2):
                 1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0))))
     x = math.sqrt(x2)
     return math.cos(x), math.sin(x) / x
-
-
-@njit(cache=True, inline="always")
-def _twice_cross(vx, vy, vz, ax, ay, az):
-    """``2 v x a``."""
-    return 2.0 * (vy * az - vz * ay), 2.0 * (vz * ax - vx * az), 2.0 * (vx * ay - vy * ax)
 
 
 @njit(cache=True, inline="always")
@@ -96,7 +92,8 @@ def _rotate(i, lx, ly, lz, axis, angular_velocity, reference_axis, half_length, 
     ks = k * sinc
     vx, vy, vz = lx * ks, ly * ks, lz * ks
     ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
-    tx, ty, tz = _twice_cross(vx, vy, vz, ax, ay, az)  # 2 v x a
+    cx, cy, cz = cross(vx, vy, vz, ax, ay, az)
+    tx, ty, tz = 2.0 * cx, 2.0 * cy, 2.0 * cz  # 2 v x a
     ax += c * tx + (vy * tz - vz * ty)
     ay += c * ty + (vz * tx - vx * tz)
     az += c * tz + (vx * ty - vy * tx)
