@@ -131,6 +131,12 @@ def study_schema() -> dict:
                          "description": "case keys and the values to sweep (every combination)"},
                 "exclude": {"type": "array", "items": {"type": "object"},
                             "description": "runs to leave out: family and axis values they match"},
+                "durations": {"type": "array",
+                              "items": {"type": "object", "required": ["duration"],
+                                        "properties": {"duration": seconds}},
+                              "description": "runs with their own simulated seconds: duration and the family "
+                                             "and axis values (each a value or a list) they match; the last "
+                                             "matching table decides"},
                 "cluster": {"type": "object", "properties": {"kind": {"enum": list(CLUSTER_KINDS)},
                                                               "workers": {"type": "integer", "minimum": 1}},
                             "description": "where the runs go: local, or dask-jobqueue's slurm, pbs, sge, lsf "

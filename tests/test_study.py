@@ -263,6 +263,69 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert neither["values"]["2"]["mixing_entropy_at_end"] == {"ar4_mp": [0.943], "ar1": [0.79]}
 
 
+def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expansion_findings():
+    from fvdem.study import check_findings
+
+    def row(family, ratio, t95, end=8.0, height=None):
+        return {"family": family, "status": "finished", "gas.u_over_umf": ratio, "t95": t95,
+                "simulated_seconds": end, "bed_height": height}
+
+    def found(rows):
+        return {f["finding"].split(" (")[0]: f for f in check_findings(rows)}
+
+    # AR-1: not mixed by 8 s at 1.7, 4.2 s at 2.0, then 3.6, 3.15, 3.1: a drop of more than 8 / 4.2 = 1.9 into
+    # 2 Umf (a lower bound), 1.17 and less above it
+    ar1 = [row("ar1", 1.7, None), row("ar1", 2.0, 4.2), row("ar1", 2.3, 3.6), row("ar1", 2.6, 3.15),
+           row("ar1", 2.9, 3.1)]
+    drop = found(ar1)["AR-1's mixing time drops sharply at 2 Umf"]
+    assert drop["verdict"] == "holds" and drop["values"]["drop 1.7 -> 2 Umf"] == "> 1.9"
+    assert drop["values"]["drops above 2 Umf"]["2.3"] == pytest.approx(4.2 / 3.6)
+    gentle = [row("ar1", 1.7, 5.0), *ar1[1:]]  # 5.0 / 4.2 = 1.19: not sharp
+    assert found(gentle)["AR-1's mixing time drops sharply at 2 Umf"]["verdict"] == "does not hold"
+    later = [row("ar1", 1.7, 6.0), row("ar1", 2.0, 4.2), row("ar1", 2.3, 2.0)]  # 1.43 into 2 Umf, 2.1 after
+    assert found(later)["AR-1's mixing time drops sharply at 2 Umf"]["verdict"] == "does not hold"
+    short = [row("ar1", 1.7, None, end=5.0), row("ar1", 2.0, 4.2)]  # > 1.19 only: run 1.7 longer
+    assert found(short)["AR-1's mixing time drops sharply at 2 Umf"]["verdict"] == "open"
+    assert found(ar1[1:])["AR-1's mixing time drops sharply at 2 Umf"]["verdict"] == "open"  # nothing below 2
+    # a replica still running and not yet mixed is left out, not taken as a bound at its current time
+    running = dict(row("ar1", 2.9, None, end=0.8), status="stopped")
+    assert found(ar1 + [running])["AR-1's mixing time drops sharply at 2 Umf"]["values"]["t95"]["2.9"] == 3.1
+
+    # AR-1 minus AR-4 MP: > 8 - 5 = 3 s at 1.7 (AR-1 unmixed), 1.2 s at 2.0, 0.3 s at 2.9: shrinks
+    mp = [row("ar4_mp", 1.7, 5.0), row("ar4_mp", 2.0, 3.0), row("ar4_mp", 2.9, 2.8)]
+    shrink = found(ar1 + mp)["the AR-1/AR-4 difference shrinks at the highest velocity"]
+    assert shrink["verdict"] == "holds" and shrink["values"]["difference at 2.9 Umf"] == pytest.approx(0.3)
+    assert shrink["values"]["differences up to 2 Umf"] == {"1.7": "> 3", "2": pytest.approx(1.2)}
+    wide = mp[:2] + [row("ar4_mp", 2.9, 1.5)]  # 1.6 s at 2.9 against 1.2 s at 2.0
+    assert found(ar1 + wide)["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "does not hold"
+    # lift and torque: drag only minus full 1.0 s at 1.7 and 2.0, 0.1 s at 2.9
+    drag = [row("ar4_mp_drag", 1.7, 6.0), row("ar4_mp_drag", 2.0, 4.0), row("ar4_mp_drag", 2.9, 2.9)]
+    lift = found(mp + drag)["the effect of lift and torque shrinks at the highest velocity"]
+    assert lift["verdict"] == "holds"
+    unmixed_top = drag[:2] + [row("ar4_mp_drag", 2.9, None)]
+    assert found(mp + unmixed_top)["the effect of lift and torque shrinks at the highest velocity"]["verdict"] == "open"
+
+    # MP against SP above 2 Umf: MP faster by more than 10 % at 2.9 holds; within 10 % needs replicas
+    sp = [row("ar4_sp", 2.0, 2.0), row("ar4_sp", 2.9, 3.3)]
+    widen = found(mp + sp)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]
+    assert widen["verdict"] == "holds" and list(widen["values"]) == ["2.9"]  # 2.0 Umf is not above 2
+    assert found(mp + [row("ar4_sp", 2.9, 2.9)])["MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] \
+        == "open"
+    replicas = mp + [row("ar4_mp", 2.9, 2.9), row("ar4_sp", 2.9, 2.9), row("ar4_sp", 2.9, 2.7)]  # 2.85 against 2.8
+    assert found(replicas)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] == "does not hold"
+
+    # bed expansion: AR-4 MP higher at both velocities holds; a run stopped short is left out
+    beds = [row("ar1", 1.6, None, height=0.34), row("ar4_mp", 1.6, None, height=0.40),
+            row("ar1", 2.9, 3.1, height=0.61), row("ar4_mp", 2.9, 2.8, height=0.70),
+            dict(row("ar4_mp", 2.3, None, end=1.0, height=0.2), status="stopped"), row("ar1", 2.3, 3.6, height=0.5)]
+    grow = found(beds)["AR-4 beds expand more than AR-1 at the same U/Umf"]
+    assert grow["verdict"] == "holds" and set(grow["values"]) == {"1.6", "2.9"}
+    beds[1] = row("ar4_mp", 1.6, None, height=0.30)
+    assert found(beds)["AR-4 beds expand more than AR-1 at the same U/Umf"]["verdict"] == "does not hold"
+    beds[1] = row("ar4_mp", 1.6, None, height=0.35)  # within 10 % of 0.34 without replicas
+    assert "too noisy" in found(beds)["AR-4 beds expand more than AR-1 at the same U/Umf"]["why"]
+
+
 def _square_or_fail(item, threads):
     if item < 0:
         raise ValueError(f"negative item {item}")
@@ -326,6 +389,34 @@ def test_a_familys_own_duration_and_a_wrong_one(tmp_path):
     assert "families.ar1.duration" in str(err.value) and "'long'" in str(err.value)
 
 
+def test_durations_tables_give_the_runs_they_match_their_own_duration_and_a_wrong_one_is_refused(tmp_path):
+    text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+    assert "[[durations]]" not in text and '"gas.u_over_umf" = [2.0, 2.9]' in text
+    # a second family beside ar1
+    text = text.replace("[axes]", f'[families.b]\ncase = "{ROOT / "cases" / "demo.toml"}"\nbed = "small"\n\n[axes]')
+    path = tmp_path / "study.toml"
+    path.write_text(text + '\n[[durations]]\n"gas.u_over_umf" = [2.0]\nduration = 0.05\n'
+                    '\n[[durations]]\nfamily = "ar1"\n"gas.u_over_umf" = 2.0\nduration = 0.07\n')
+    study = load_study(path, tmp_path / "out")
+    runs = {(r.family, r.point["gas.u_over_umf"]): r for r in study.runs}
+    assert len(runs) == 4
+    for (family, ratio), run in runs.items():  # the last matching table decides; unmatched runs keep the study's
+        expected = (0.07 if family == "ar1" else 0.05) if ratio == 2.0 else study.duration
+        assert run.duration == expected and run.overrides["time.end"] == expected, (family, ratio)
+    for table, key, shown in (('"gas.u_over_umf" = 1.6\nduration = 1.0', "durations[0].gas.u_over_umf", "1.6"),
+                              ('family = "ar9"\nduration = 1.0', "durations[0].family", "'ar9'"),
+                              ('"gas.umf" = 1.9\nduration = 1.0', "durations[0].gas.umf", "1.9"),
+                              ('family = "ar1"\nduration = -2', "durations[0].duration", "-2")):
+        path.write_text(text + "\n[[durations]]\n" + table + "\n")
+        with pytest.raises(CaseError) as err:
+            load_study(path, tmp_path / "out")
+        assert key in str(err.value) and shown in str(err.value), str(err.value)
+    path.write_text('durations = 3\n' + text)
+    with pytest.raises(CaseError) as err:
+        load_study(path, tmp_path / "out")
+    assert "durations" in str(err.value) and "[[durations]]" in str(err.value)
+
+
 def _small_run(tmp_path, end):
     bed_case = ROOT / "cases" / "demo.toml"
     out = tmp_path / "study"
@@ -363,6 +454,12 @@ def test_the_stop_file_checkpoints_a_running_run_and_keeps_queued_runs_from_star
     resumed = run_task(run, 1)
     assert resumed["status"] == "resumed" and resumed["simulated_seconds"] == pytest.approx(0.02)
     assert run_task(run, 1)["status"] == "skipped"
+    # a longer duration (a [[durations]] table added after the run finished) continues it from its end
+    from dataclasses import replace
+    longer = replace(run, duration=0.024, overrides={**run.overrides, "time.end": 0.024})
+    extended = run_task(longer, 1)
+    assert extended["status"] == "resumed" and extended["simulated_seconds"] == pytest.approx(0.024)
+    assert "resumed at t = 0.02 s" in (Path(run.folder) / "run.log").read_text()
 
 
 def test_the_index_lists_every_run_and_a_partial_invocation_keeps_the_others_results(tmp_path):

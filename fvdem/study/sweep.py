@@ -14,7 +14,7 @@ from .reports import DEFAULT_REPORT, REPORTS, report_for
 
 
 STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
-              "cluster", "report"}
+              "durations", "cluster", "report"}
 
 
 @dataclass(frozen=True)
@@ -146,6 +146,7 @@ def study_from_table(table: dict, path, out) -> Study:
     if not isinstance(exclusions, list) or not all(isinstance(e, dict) for e in exclusions):
         _problem(problems, "exclude", exclusions, "a list of tables ([[exclude]] with family and axis values)")
         exclusions = []
+    durations = _durations(table.get("durations", []), families, axes, problems)
     runs = []
     names = list(axes)
     for family, spec in families.items():
@@ -173,6 +174,9 @@ def study_from_table(table: dict, path, out) -> Study:
                                  for k, v in point.items())
                 run_name = "_".join(x for x in (family, label, f"r{replica}" if family_replicas > 1 else "") if x)
                 run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
+                for match, seconds in durations:  # the last [[durations]] table that matches the run decides
+                    if match(family, point):
+                        run_duration = seconds
                 overrides = {**settings, **sets, **point, "time.end": run_duration}
                 if family_replicas > 1 and bed is None:  # a run that inserts its own particles
                     overrides["particles.insertion.seed"] = replica
@@ -193,6 +197,47 @@ def study_from_table(table: dict, path, out) -> Study:
     if problems:
         raise CaseError(problems)
     return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report)
+
+
+def _matches(key, wanted, value) -> bool:
+    """Whether a run's ``value`` of ``key`` (its family or an axis) is ``wanted``: one value or a list of them."""
+    return value in wanted if isinstance(wanted, list) else value == wanted
+
+
+def _durations(tables, families: dict, axes: dict, problems) -> list:
+    """The ``[[durations]]`` tables as ``(match(family, point), seconds)``: each gives the runs that match all
+    its keys (``family`` and axis keys, each a value or a list of values) their own simulated seconds
+    (``duration``), e.g. the slow-mixing low velocities of a study run longer. A key that is not ``family``,
+    ``duration`` or an axis, a family or axis value the study lacks and a wrong duration are problems."""
+    if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
+        _problem(problems, "durations", tables, "a list of tables ([[durations]] with duration = simulated "
+                 "seconds and the family and axis values of the runs it applies to)")
+        return []
+    out = []
+    allowed = {"family", "duration", *axes}
+    for k, spec in enumerate(tables):
+        where = f"durations[{k}]"
+        seconds = spec.get("duration")
+        if not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or not 0 < seconds < 1e6:
+            _problem(problems, f"{where}.duration", seconds, "a number of simulated seconds > 0")
+            continue
+        keys = {key: wanted for key, wanted in spec.items() if key != "duration"}
+        bad = False
+        for key, wanted in keys.items():
+            known = list(families) if key == "family" else axes.get(key)
+            if known is None:
+                _problem(problems, f"{where}.{key}", wanted, f"unknown key{_did_you_mean(key, allowed)}; allowed: "
+                         + ", ".join(sorted(allowed)))
+                bad = True
+            elif any(w not in known for w in (wanted if isinstance(wanted, list) else [wanted])):
+                _problem(problems, f"{where}.{key}", wanted, "one of the study's values or a list of them: "
+                         + ", ".join(map(str, known)))
+                bad = True
+        if not bad:
+            out.append(((lambda family, point, keys=keys: all(
+                _matches(key, wanted, family if key == "family" else point.get(key)) for key, wanted in keys.items())),
+                float(seconds)))
+    return out
 
 
 def _replicas(table: dict, path: str, default: int, problems) -> int:
