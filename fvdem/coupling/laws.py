@@ -137,13 +137,23 @@ def sp_drag_at(re, es, column):
     Re / 24``, ``C_d,isol = (a1/Re + a2/Re^a3) exp(-a4 Re) + a5 (1 - exp(-a4 Re))``, ``F_eps = a sqrt(eps_s) /
     (1 - eps_s)^2 + b eps_s / (1 - eps_s)^2``, ``F_Re,eps = Re^c eps_s^d (e (1 - eps_s) + f eps_s^3 / (1 - eps_s))
     + g eps_s (1 - eps_s)^2 Re``."""
+    return _sp_drag_logs(re, math.log(re), es, math.log(es), column)
+
+
+@njit(cache=True, inline="always")
+def _sp_drag_logs(re, ln_re, es, ln_es, column):
+    """``sp_drag_at`` given also ``ln Re`` and ``ln eps_s``: each power an exponential, ``x^a = exp(a ln x)``,
+    the logarithms shared by both incidences and the torque (a power costs about a logarithm and an
+    exponential: the Sanjeevi-Padding set of a particle took 14 of them; ``eps_s = 0`` gives ``ln = -inf``
+    and the powers, of positive exponents, 0 as before)."""
     a1, a2, a3, a4, a5 = SP_DRAG[column, 0], SP_DRAG[column, 1], SP_DRAG[column, 2], SP_DRAG[column, 3], SP_DRAG[column, 4]
     a, b, c, d = SP_DRAG[column, 5], SP_DRAG[column, 6], SP_DRAG[column, 7], SP_DRAG[column, 8]
     e, f, g = SP_DRAG[column, 9], SP_DRAG[column, 10], SP_DRAG[column, 11]
-    cd_isol = (a1 / re + a2 / re ** a3) * math.exp(-a4 * re) + a5 * (1 - math.exp(-a4 * re))
+    decay = math.exp(-a4 * re)
+    cd_isol = (a1 / re + a2 * math.exp(-a3 * ln_re)) * decay + a5 * (1 - decay)
     f_isol = cd_isol * re / 24.0
     f_eps = a * math.sqrt(es) / (1 - es) ** 2 + b * es / (1 - es) ** 2
-    f_re_eps = re ** c * es ** d * (e * (1 - es) + f * es ** 3 / (1 - es)) + g * es * (1 - es) ** 2 * re
+    f_re_eps = math.exp(c * ln_re + d * ln_es) * (e * (1 - es) + f * es ** 3 / (1 - es)) + g * es * (1 - es) ** 2 * re
     return f_isol * (1 - es) ** 2 + f_eps + f_re_eps
 
 
@@ -151,8 +161,16 @@ def sp_drag_at(re, es, column):
 def zastawny(re, alpha, k):
     """Zastawny et al. (2012) form (Mema et al. Eq. 24; Table 3 for AR-4 spherocylinders), ``k`` = b1..b10
     (lift) or c1..c10 (torque): ``(k1/Re^k2 + k3/Re^k4) sin(alpha)^(k5 + k6 Re^k7) cos(alpha)^(k8 + k9 Re^k10)``."""
-    return ((k[0] / re ** k[1] + k[2] / re ** k[3]) * math.sin(alpha) ** (k[4] + k[5] * re ** k[6])
-            * math.cos(alpha) ** (k[7] + k[8] * re ** k[9]))
+    return _zastawny_logs(math.log(re), math.log(math.sin(alpha)), math.log(math.cos(alpha)), k)
+
+
+@njit(cache=True, inline="always")
+def _zastawny_logs(ln_re, ln_sin, ln_cos, k):
+    """``zastawny`` from ``ln Re``, ``ln sin(alpha)`` and ``ln cos(alpha)``: its six powers as four exponentials
+    (``x^a = exp(a ln x)``; the two angle factors one exponential of a sum). At alpha = 0, ``ln sin = -inf``
+    and the factor is 0, as the power was (both tables' angle exponents are positive)."""
+    return ((k[0] * math.exp(-k[1] * ln_re) + k[2] * math.exp(-k[3] * ln_re))
+            * math.exp((k[4] + k[5] * math.exp(k[6] * ln_re)) * ln_sin + (k[7] + k[8] * math.exp(k[9] * ln_re)) * ln_cos))
 
 
 @njit(cache=True, inline="always")
@@ -160,7 +178,16 @@ def isolated_torque_magnitude(re):
     """``T_p,isol(Re)``, not given in Mema et al. (2020) (flagged): matching Eq. 30 to Eq. 27 at eps_s -> 0
     gives ``T_P,phi = C_T Re / 32``; with the sin phi cos phi dependence taken out at 45 degrees:
     ``T_p,isol = C_T,45(Re) Re / (32 sin 45 cos 45) = C_T,45 Re / 16``."""
-    return zastawny(re, np.pi / 4, Z_TORQUE) * re / 16.0
+    return _isolated_torque_logs(re, math.log(re))
+
+
+LN_SIN_45 = math.log(math.sin(np.pi / 4))  # = ln cos(pi/4) = -ln(2)/2
+
+
+@njit(cache=True, inline="always")
+def _isolated_torque_logs(re, ln_re):
+    """``isolated_torque_magnitude`` given also ``ln Re`` (``_zastawny_logs`` at 45 degrees)."""
+    return _zastawny_logs(ln_re, LN_SIN_45, LN_SIN_45, Z_TORQUE) * re / 16.0
 
 
 @njit(cache=True, inline="always")
@@ -304,11 +331,21 @@ def hoelzer_sommerfeld_drag(sx, sy, sz, eps, ax, ay, az, shape):
 
 @njit(cache=True, inline="always")
 def _sanjeevi_padding_state(sx, sy, sz, eps, ax, ay, az, shape):
-    """What Sanjeevi & Padding's three laws share: slip speed, Re, cos^2 of the incidence and F at 0 and 90 deg."""
+    """What Sanjeevi & Padding's three laws share: slip speed, Re and its logarithm, cos^2 of the incidence and F
+    at 0 and 90 deg."""
     speed = slip_speed(sx, sy, sz)
     re = reynolds(speed, eps, shape[D_P], shape[RHO], shape[MU])
     c2 = cos2(sx, sy, sz, ax, ay, az, speed)
-    return speed, re, c2, sp_drag_at(re, 1.0 - eps, 0), sp_drag_at(re, 1.0 - eps, 1)
+    ln_re, es = math.log(re), 1.0 - eps
+    ln_es = math.log(es)
+    return speed, re, ln_re, c2, _sp_drag_logs(re, ln_re, es, ln_es, 0), _sp_drag_logs(re, ln_re, es, ln_es, 1)
+
+
+@njit(cache=True, inline="always")
+def _sin_cos(c2):
+    """``sin(phi) cos(phi)`` of the incidence ``phi = arccos(sqrt(cos^2))`` in [0, pi/2] (``incidence``), from
+    cos^2 alone: ``sqrt(cos^2 (1 - cos^2))`` (no arccos, sine or cosine)."""
+    return math.sqrt(c2 * (1.0 - c2))
 
 
 @njit(cache=True, inline="always")
@@ -318,24 +355,26 @@ def _sanjeevi_padding_drag(eps, c2, f0, f90, shape):
 
 
 @njit(cache=True, inline="always")
-def _sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, speed, phi, f0, f90, shape):
-    """Eqs. 25-26: ``F_L = 3 pi mu d_p eps |u| (F_90 - F_0) sin phi cos phi`` along ``lift_direction``."""
-    f_l = (f90 - f0) * math.sin(phi) * math.cos(phi)
+def _sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, speed, sin_cos, f0, f90, shape):
+    """Eqs. 25-26: ``F_L = 3 pi mu d_p eps |u| (F_90 - F_0) sin phi cos phi`` along ``lift_direction``
+    (``sin_cos = sin phi cos phi``, ``_sin_cos``)."""
+    f_l = (f90 - f0) * sin_cos
     magnitude = 3 * np.pi * shape[MU] * shape[D_P] * eps * speed * f_l
     x, y, z = lift_direction(sx, sy, sz, ax, ay, az)
     return x * magnitude, y * magnitude, z * magnitude
 
 
 @njit(cache=True, inline="always")
-def _sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, speed, re, phi, shape):
+def _sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, speed, re, ln_re, sin_cos, shape):
     """Eqs. 30-33, Table 4: ``T = 2 pi mu d_p^2 eps |u| T_P,mag sin phi cos phi`` along ``torque_direction``,
     ``T_P,mag = T_p,isol (1 - eps_s)^2 + Re^a eps_s^b [c (1 - eps_s) + d eps_s^3/(1 - eps_s)] + e eps_s
-    (1 - eps_s)^2 Re`` (``isolated_torque_magnitude``)."""
+    (1 - eps_s)^2 Re`` (``isolated_torque_magnitude``); ``ln_re = ln Re``, ``sin_cos = sin phi cos phi``."""
     es = 1.0 - eps
-    t_mag = (isolated_torque_magnitude(re) * (1 - es) ** 2
-             + re ** SP_TORQUE[0] * es ** SP_TORQUE[1] * (SP_TORQUE[2] * (1 - es) + SP_TORQUE[3] * es ** 3 / (1 - es))
+    t_mag = (_isolated_torque_logs(re, ln_re) * (1 - es) ** 2
+             + math.exp(SP_TORQUE[0] * ln_re + SP_TORQUE[1] * math.log(es))
+             * (SP_TORQUE[2] * (1 - es) + SP_TORQUE[3] * es ** 3 / (1 - es))
              + SP_TORQUE[4] * es * (1 - es) ** 2 * re)
-    magnitude = 2 * np.pi * shape[MU] * shape[D_P] ** 2 * eps * speed * t_mag * math.sin(phi) * math.cos(phi)
+    magnitude = 2 * np.pi * shape[MU] * shape[D_P] ** 2 * eps * speed * t_mag * sin_cos
     x, y, z = torque_direction(sx, sy, sz, ax, ay, az)
     return x * magnitude, y * magnitude, z * magnitude
 
@@ -344,7 +383,7 @@ def _sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, speed, re, phi, shape)
 def sanjeevi_padding_drag(sx, sy, sz, eps, ax, ay, az, shape):
     """Sanjeevi & Padding (2020), Eqs. 15-16 (``_sanjeevi_padding_drag``), F at 0 and 90 deg from
     ``sp_drag_at``, phi the angle between axis and slip. Re 0.1-1000, eps_s 0-0.35, AR 4."""
-    _, _, c2, f0, f90 = _sanjeevi_padding_state(sx, sy, sz, eps, ax, ay, az, shape)
+    _, _, _, c2, f0, f90 = _sanjeevi_padding_state(sx, sy, sz, eps, ax, ay, az, shape)
     return _sanjeevi_padding_drag(eps, c2, f0, f90, shape)
 
 
@@ -437,8 +476,8 @@ def sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, shape):
     """Sanjeevi & Padding (2020) lift (Eqs. 25-26, ``_sanjeevi_padding_lift``; normalised like the drag, on
     the superficial slip; the extracted Eq. 26 shows no eps: identical at eps -> 1). Re 0.1-1000, eps_s
     0-0.35, AR 4."""
-    speed, _, c2, f0, f90 = _sanjeevi_padding_state(sx, sy, sz, eps, ax, ay, az, shape)
-    return _sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, speed, math.acos(math.sqrt(c2)), f0, f90, shape)
+    speed, _, _, c2, f0, f90 = _sanjeevi_padding_state(sx, sy, sz, eps, ax, ay, az, shape)
+    return _sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, speed, _sin_cos(c2), f0, f90, shape)
 
 
 @njit(FORCE, cache=True, inline="always")
@@ -447,8 +486,8 @@ def sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, shape):
     eps_s 0-0.35, AR 4."""
     speed = slip_speed(sx, sy, sz)
     re = reynolds(speed, eps, shape[D_P], shape[RHO], shape[MU])
-    return _sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, speed, re, incidence(sx, sy, sz, ax, ay, az, speed),
-                                    shape)
+    return _sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, speed, re, math.log(re),
+                                    _sin_cos(cos2(sx, sy, sz, ax, ay, az, speed)), shape)
 
 
 @njit(FORCE, cache=True, inline="always")
@@ -462,10 +501,10 @@ def no_force(sx, sy, sz, eps, ax, ay, az, shape):
 def sanjeevi_padding_set(sx, sy, sz, eps, ax, ay, az, shape):
     """Sanjeevi & Padding's drag, lift and torque of one particle, their shared state computed once
     (the same pieces as the three laws: the same numbers): ``(c, lift x, y, z, torque x, y, z)``."""
-    speed, re, c2, f0, f90 = _sanjeevi_padding_state(sx, sy, sz, eps, ax, ay, az, shape)
-    phi = math.acos(math.sqrt(c2))
-    lx, ly, lz = _sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, speed, phi, f0, f90, shape)
-    tx, ty, tz = _sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, speed, re, phi, shape)
+    speed, re, ln_re, c2, f0, f90 = _sanjeevi_padding_state(sx, sy, sz, eps, ax, ay, az, shape)
+    sin_cos = _sin_cos(c2)
+    lx, ly, lz = _sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, speed, sin_cos, f0, f90, shape)
+    tx, ty, tz = _sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, speed, re, ln_re, sin_cos, shape)
     return _sanjeevi_padding_drag(eps, c2, f0, f90, shape), lx, ly, lz, tx, ty, tz
 
 
