@@ -135,6 +135,12 @@ def cmd_study(args) -> int:
         for path in archive(target, args.archive):
             print(path)
         return 0
+    if args.results:
+        if not target.is_dir() or not (target / "study.json").exists():
+            return _fail(f"--results: {target} is not a study folder or an archive of one (no study.json)")
+        from .study import results
+        print(results(target, args.results))
+        return 0
     if args.report and target.is_dir():
         if not (target / "study.json").exists():
             return _fail(f"{target} is not a study folder (no study.json)")
@@ -333,6 +339,9 @@ def make_parser() -> argparse.ArgumentParser:
                        help="copy the compact results of a study folder's runs to DEST (time series, summaries, "
                             "void-fraction histograms, logs; no states or VTU), small enough to commit; "
                             "fvdem study DEST --report rebuilds the report from them")
+    study.add_argument("--results", metavar="FILE",
+                       help="write a study folder's (or an archive's) results as one JSON file: its table rows, "
+                            "its findings and what made them (code, machine, how many runs ended); the report first")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
     study.add_argument("--stop", action="store_true",
                        help="ask the study running in this folder to stop (its runs checkpoint first)")

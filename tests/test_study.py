@@ -287,9 +287,13 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     short = [row("ar1", 1.7, None, end=5.0), row("ar1", 2.0, 4.2)]  # > 1.19 only: run 1.7 longer
     assert found(short)["AR-1's mixing time drops sharply at 2 Umf"]["verdict"] == "open"
     assert found(ar1[1:])["AR-1's mixing time drops sharply at 2 Umf"]["verdict"] == "open"  # nothing below 2
-    # a replica still running and not yet mixed is left out, not taken as a bound at its current time
+    # a replica still running and not yet mixed, or one not started, is left out, not taken as a bound at its
+    # current time (nor as unmixed by the other findings)
     running = dict(row("ar1", 2.9, None, end=0.8), status="stopped")
-    assert found(ar1 + [running])["AR-1's mixing time drops sharply at 2 Umf"]["values"]["t95"]["2.9"] == 3.1
+    waiting = dict(row("ar1", 2.6, None, end=0.0), status="pending")
+    everything = found(ar1 + [running, waiting])
+    assert everything["AR-1's mixing time drops sharply at 2 Umf"]["values"]["t95"]["2.9"] == 3.1
+    assert everything["terminal t95 of ar1 about 2.6 s"]["verdict"] == "does not hold"  # 3.6, 3.15, 3.1
 
     # AR-1 minus AR-4 MP: > 8 - 5 = 3 s at 1.7 (AR-1 unmixed), 1.2 s at 2.0, 0.3 s at 2.9: shrinks
     mp = [row("ar4_mp", 1.7, 5.0), row("ar4_mp", 2.0, 3.0), row("ar4_mp", 2.9, 2.8)]
@@ -744,6 +748,13 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert rounded(json.loads((dest / "findings.json").read_text())) == rounded(findings)
     assert rounded(table) == rounded(again)
     assert (dest / "runs" / "ar1_u_over_umf2" / "run.log").exists() and (dest / "fig7_void_fraction_2.png").exists()
+    # the results as one file (docs/data/mema2020.json): the table's rows, the findings, what made them
+    assert main(["study", str(dest), "--results", str(tmp_path / "results.json")]) == 0
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert results["study"] == "t" and results["findings"] == json.loads((dest / "findings.json").read_text())
+    assert [r["name"] for r in results["runs"]] == [r["name"] for r in again] and "folder" not in results["runs"][0]
+    assert results["ran"].startswith("2 of 2 runs reached their end, 0 on the way, 0 not started")
+    assert main(["study", str(tmp_path), "--results", str(tmp_path / "r.json")]) == 2  # not a study folder
 
 
 def _study_table(**changes):
@@ -837,7 +848,7 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     first = [_priority(r) for r in study.runs if r.replica == 1]
     second = [_priority(r) for r in study.runs if r.replica == 2]
     assert min(first) > max(second)
-    assert max(first) == 8.0 / 5e-5  # then longest first within a replica
+    assert max(first) == 16.0 / 5e-5  # then longest first within a replica (the [[durations]] points: 16 s)
     beds = {b.name: _bed_priority(b) for b in study.beds}
     assert set(beds) == {"ar1", "ar4", "ar1_r2", "ar4_r2"}
     assert min(beds["ar1"], beds["ar4"]) > max(first)
@@ -921,6 +932,6 @@ def test_the_generic_report_writes_the_table_alone(tmp_path):
         if name == "table":
             assert written == {"table.csv", "table.json"}
             assert set(rows[0]) == {"name", "family", "gas.u_over_umf", "status", "wall_seconds",
-                                    "simulated_seconds", "replica"}
+                                    "simulated_seconds", "duration", "replica"}
         else:
             assert {"findings.json", "t95.png"} <= written and "t95" in rows[0] and "void_fraction_binarity" in rows[0]

@@ -50,7 +50,7 @@ from .checks import read_toml
 from .cluster import (CLUSTER_KINDS, CLUSTER_TYPES, DEFAULT_STOP_BEFORE_WALLTIME, JOB_END_ENV, STOP_MARGIN_ENV,
                       check_cluster, close_client, cluster_keys, job_deadline, jobqueue_options, load_cluster,
                       make_client, walltime_seconds)
-from .reports import REPORTS, StudyReport, archive, register_report, report, report_for
+from .reports import REPORTS, StudyReport, archive, register_report, report, report_for, results
 from .runner import map_tasks, progress_line, request_stop, run_study, task_tag, write_index
 from .sweep import STUDY_KEYS, BedSpec, RunSpec, Study, load_study, select_runs, study_from_table
 from .tasks import STOP_FILE, StudyStopped, prepare_bed, run_task
@@ -60,6 +60,7 @@ __all__ = ["CLUSTER_KINDS", "CLUSTER_TYPES", "DEFAULT_STOP_BEFORE_WALLTIME", "JO
            "STOP_MARGIN_ENV", "STUDY_KEYS", "BedSpec", "RunSpec", "Study", "StudyReport", "StudyStopped", "archive",
            "check_cluster", "check_findings", "close_client", "cluster_keys", "job_deadline", "jobqueue_options",
            "load_cluster", "load_study", "make_client", "map_tasks", "prepare_bed", "progress_line", "read_toml",
-           "register_report", "report", "report_for", "request_stop", "run_study", "run_task", "select_runs",
+           "register_report", "report", "report_for", "request_stop", "results", "run_study", "run_task",
+           "select_runs",
            "study_from_table", "task_tag", "void_fraction_record", "void_fraction_samples", "walltime_seconds",
            "write_index"]

@@ -10,7 +10,7 @@ import math
 from pathlib import Path
 
 from ..case import CaseError, load_case
-from .reports import StudyReport, register_report
+from .reports import ENDED, IN_PROGRESS, StudyReport, register_report
 
 
 def _bed_surface(series):
@@ -207,15 +207,13 @@ def _compare(rows, faster, slower, velocities, claim):
     return {"finding": claim, "verdict": "holds" if holds else "does not hold", "values": values}
 
 
-IN_PROGRESS = ("stopped", "paused", "pending")  # a run's status before it reached its end
 SHARP = 1.3  # t95 just below 2 Umf over t95 at 2 Umf: a drop by a quarter or more is sharp
 
 
 def _mean_t95(rows, family) -> dict:
     """``{U/Umf: (mean t95 over the replicas, whether it is a lower bound)}`` of a family: a replica not mixed by
-    its end counts as its end time, which makes the mean a lower bound; one still running and not yet mixed
-    is left out (its end is not its run's), and so is a velocity with an unmixed replica of unknown end."""
-    rows = [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
+    its end counts as its end time, which makes the mean a lower bound (``check_findings`` has left out the
+    runs still on their way), and a velocity with an unmixed replica of unknown end is left out."""
     t, ends = _t95(rows, family), _by_velocity(rows, family, "simulated_seconds")
     out = {}
     for v, values in t.items():
@@ -280,7 +278,7 @@ def _expansion(rows) -> dict:
     """AR-4 MP beds expand more than AR-1 beds at the same U/Umf (§5.1): the bed's height (``bed_top`` over
     the second half of each run that reached its end) higher at every velocity both ran."""
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf"
-    ended = [r for r in rows if r["status"] in ("finished", "resumed", "skipped") and r.get("bed_height") is not None]
+    ended = [r for r in rows if r["status"] in ENDED and r.get("bed_height") is not None]
     a, b = _by_velocity(ended, "ar4_mp", "bed_height"), _by_velocity(ended, "ar1", "bed_height")
     common = sorted(set(a) & set(b))
     if not common:
@@ -307,7 +305,9 @@ def check_findings(rows) -> list:
     against MP (slight; MP faster above 2 Umf), the terminal t95 and its change above 2.3 Umf; from the bed
     height: AR-4 beds expand more; from the gas snapshots: AR-1's void fractions more binary than AR-4's
     (``void_fraction_binarity``, Fig. 7); and whether fvdem's defaults change the mixing (a family
-    ``ar1_paper`` at the paper's settings beside ``ar1``)."""
+    ``ar1_paper`` at the paper's settings beside ``ar1``). A run still on its way (or not started) counts
+    once it has mixed; until then it is left out, not taken as unmixed."""
+    rows = [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
     findings = [
         _compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
         _gap_shrinks(rows, "ar1", "ar4_mp", "the AR-1/AR-4 difference shrinks at the highest velocity (2.9 Umf)"),

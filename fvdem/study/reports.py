@@ -1,5 +1,6 @@
 """A study's results: reports registered by name, the table, figures and findings they make from the run
-folders (``report``), and the compact archive of a study folder (``archive``).
+folders (``report``), the compact archive of a study folder (``archive``) and its results as one JSON file
+(``results``).
 
 The runner and the tasks know nothing of what a run measures; a report does. It says which values of a
 run's summary ``study.json`` keeps (``run_values``: seed 000's report keeps t95), the detail of a finished
@@ -19,6 +20,9 @@ from pathlib import Path
 from typing import Callable
 
 from .tasks import _simulated_so_far
+
+ENDED = ("finished", "resumed", "skipped")  # a run's status once it reached its end
+IN_PROGRESS = ("pending", "stopped", "paused", "running")  # before it: "running" where its series passed its summary
 
 
 @dataclass(frozen=True)
@@ -98,14 +102,22 @@ def report(out) -> list:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
         series = _series(Path(r["folder"]))
-        if (not data or data.get("stopped_early")) and series is not None:
-            # a run in progress: what its time series holds (the summary of an earlier stop is stale)
+        if series is not None and (not data or data.get("stopped_early")
+                                   or float(series["time"][-1]) > float(data.get("simulated_time", 0.0)) + 1e-9):
+            # a run in progress: what its time series holds (the summary of an earlier stop, or of the end
+            # before its duration was raised, is stale)
+            if data and not data.get("stopped_early") and r["status"] not in IN_PROGRESS:
+                r = {**r, "status": "running"}
             data = _so_far(series, chosen)
             r = {**r, **(chosen.run_values(data) if chosen.run_values else {})}
+        elif r.get("duration") and r["status"] not in IN_PROGRESS and r["status"] != "failed" and \
+                float(data.get("simulated_time") or 0.0) < r["duration"] * (1 - 1e-9):
+            r = {**r, "status": "pending"}  # ended before its duration was raised: more to run
         row = {"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"]}
         if chosen.columns:
             row.update(chosen.columns(r, Path(r["folder"]), data, series))
         row.update({"wall_seconds": data.get("wall_seconds"), "simulated_seconds": data.get("simulated_time"),
+                    "duration": r.get("duration"),
                     "replica": r.get("replica") or int((re.search(r"_r(\d+)$", r["name"]) or [0, 1])[1])})
         rows.append(row)
     (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
@@ -143,7 +155,8 @@ def archive(out, dest) -> list:
     for r in index["runs"]:
         folder = Path(r["folder"])
         series = _series(folder)
-        if series is None:
+        if series is None:  # listed without a folder (not started yet): the archive still counts every run
+            runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}", "simulated_seconds": 0.0})
             continue
         target = dest / "runs" / r["name"]
         held = _simulated_so_far(target, live=True) if target.exists() else -1.0
@@ -173,3 +186,60 @@ def archive(out, dest) -> list:
     if (out / "study.toml").exists():
         (dest / "study.toml").write_text((out / "study.toml").read_text())
     return written + report(dest)
+
+
+# --------------------------------------------------------------------------- the results as one file
+
+
+def results(out, dest) -> Path:
+    """The study's results as one JSON file ``dest`` (e.g. ``docs/data/mema2020.json``), rebuilt from the
+    study folder or its archive (its report first): ``study``, ``file``, ``date``, ``code`` (the commits the
+    runs ran with, shortest first mention of each), ``machine`` (hosts, threads, libraries of the runs),
+    ``ran`` (how many runs reached their end, how many are on the way, how many have not started), ``runs``
+    (the table's rows without folders) and ``findings`` (the report's, if it has them). Returns ``dest``."""
+    import datetime
+
+    out, dest = Path(out), Path(dest)
+    report(out)
+    index = json.loads((out / "study.json").read_text())
+    rows = json.loads((out / "table.json").read_text())
+    commits, hosts, libraries, commands = {}, set(), set(), []
+    for r in index["runs"]:
+        folder = Path(r["folder"]) if Path(r["folder"]).is_absolute() else out / r["folder"]
+        summary = folder / "summary.json"
+        made = json.loads(summary.read_text()).get("provenance", {}) if summary.exists() else {}
+        commands.append(made.get("command") or "")
+        if made.get("commit"):
+            commits.setdefault(made["commit"][:7], []).append(r["name"])
+        if made.get("host"):
+            hosts.add(f"{made['host']} ({made.get('threads')} thread(s) a run)")
+            libraries.add(", ".join(f"{k} {made[k]}" for k in ("fvdem", "python", "numpy", "numba", "fipy") if k in made))
+    ended = sum(r["status"] in ENDED for r in rows)
+    started = sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows)
+    findings = json.loads((out / "findings.json").read_text()) if (out / "findings.json").exists() else None
+    decided = None if findings is None else sum(f["verdict"] != "open" for f in findings)
+    study = {
+        "study": index.get("study"), "file": index.get("file") or _study_file(commands),
+        "date": datetime.date.today().isoformat(),
+        "code": {commit: f"{len(names)} run(s)" for commit, names in commits.items()},
+        "machine": {"hosts": sorted(hosts), "libraries": sorted(libraries)},
+        "ran": f"{ended} of {len(rows)} runs reached their end, {started} on the way, "
+               f"{len(rows) - ended - started} not started"
+               + ("" if findings is None else f"; {decided} of {len(findings)} findings decided"),
+        "runs": [{k: v for k, v in row.items() if k != "folder"} for row in rows],
+    }
+    if findings is not None:
+        study["findings"] = findings
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    dest.write_text(json.dumps(study, indent=1) + "\n")
+    return dest
+
+
+def _study_file(commands) -> str | None:
+    """The study file named by the runs' commands (``fvdem study FILE ...``; an index written before it
+    recorded its file)."""
+    for command in commands:
+        match = re.search(r"\bstudy\s+(\S+\.toml)", command)
+        if match:
+            return match[1]
+    return None
