@@ -757,6 +757,20 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert main(["study", str(tmp_path), "--results", str(tmp_path / "r.json")]) == 2  # not a study folder
 
 
+def test_the_t95_chart_shows_runs_that_mixed_or_ended_not_runs_on_their_way(tmp_path):
+    from fvdem.study.mema2020 import _mixed_or_ended
+    mixed, slow = tmp_path / "mixed", tmp_path / "slow"
+    _fake_run(mixed, "ar1", 2.0, 1.2, [0.5])  # entropy 0.95 at 2.5 s
+    _fake_run(slow, "ar1", 1.6, 0.1, [0.5])  # 0.33 at its end, 4 s
+    assert _mixed_or_ended({"folder": str(mixed)}) and _mixed_or_ended({"folder": str(slow)})
+    assert not _mixed_or_ended({"folder": str(slow), "duration": 8.0})  # its duration raised: more to run
+    summary = json.loads((slow / "summary.json").read_text())
+    (slow / "summary.json").write_text(json.dumps({**summary, "stopped_early": True}))
+    assert not _mixed_or_ended({"folder": str(slow)})  # stopped on its way
+    (slow / "summary.json").unlink()
+    assert not _mixed_or_ended({"folder": str(slow)}) and _mixed_or_ended({"folder": str(mixed)})
+
+
 def _study_table(**changes):
     import tomllib
     table = tomllib.loads(SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/'))

@@ -370,17 +370,35 @@ def _live(series) -> dict:
     return out
 
 
+def _mixed_or_ended(r: dict) -> bool:
+    """Whether the t95 chart shows a run: mixed (its t95 known), or ended unmixed (its end a lower bound of
+    t95); a run still on its way and not yet mixed is left out (its current time bounds nothing yet)."""
+    from ..analysis.mixing import mixing_time
+    from .reports import _series
+    folder = Path(r["folder"])
+    series = _series(folder)
+    if series is None:
+        return False
+    if "mixing_entropy" in series and mixing_time(series["time"], series["mixing_entropy"]) is not None:
+        return True
+    summary = json.loads((folder / "summary.json").read_text()) if (folder / "summary.json").exists() else {}
+    end = float(summary.get("simulated_time") or 0.0)
+    return (bool(summary) and not summary.get("stopped_early") and float(series["time"][-1]) <= end + 1e-9
+            and end >= (r.get("duration") or 0.0) * (1 - 1e-9))
+
+
 def _figures(out: Path, runs: list) -> list:
-    """Mixing entropy per family (Fig. 2), t95 against U/Umf (Fig. 4), and at each velocity both families
-    ran: AR-1 against AR-4 MP (Fig. 3) with their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only
+    """Mixing entropy per family (Fig. 2), t95 against U/Umf (Fig. 4: the runs that mixed or ended), and at each
+    velocity both families ran: AR-1 against AR-4 MP (Fig. 3) with their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only
     against drag + lift + torque (Fig. 9)."""
     from ..analysis.plots import plot_mixing, plot_t95
     paths = []
     for family in sorted({r["family"] for r in runs}):
         paths.append(plot_mixing([Path(r["folder"]) for r in runs if r["family"] == family],
                                  out / f"mixing_{family}.png"))
-    if runs:
-        paths.append(plot_t95([Path(r["folder"]) for r in runs], out / "t95.png", names=[r["family"] for r in runs]))
+    shown = [r for r in runs if _mixed_or_ended(r)]
+    if shown:
+        paths.append(plot_t95([Path(r["folder"]) for r in shown], out / "t95.png", names=[r["family"] for r in shown]))
     for figure, (first, second) in (("fig3", ("ar1", "ar4_mp")), ("fig9", ("ar4_mp_drag", "ar4_mp"))):
         for point, pair in sorted(_pairs(runs, first, second).items()):
             tag = "_".join(f"{v:g}" for v in point)
