@@ -10,7 +10,7 @@ import math
 from pathlib import Path
 
 from ..case import CaseError, load_case
-from .reports import ENDED, IN_PROGRESS, StudyReport, register_report
+from .reports import ENDED, IN_PROGRESS, StudyReport, _series, register_report
 
 
 def _bed_surface(series):
@@ -207,7 +207,7 @@ def _compare(rows, faster, slower, velocities, claim):
     return {"finding": claim, "verdict": "holds" if holds else "does not hold", "values": values}
 
 
-SHARP = 1.3  # t95 just below 2 Umf over t95 at 2 Umf: a drop by a quarter or more is sharp
+SHARP = 1.3  # t95 just below 2 Umf over t95 at 2 Umf: a fall to 1 / 1.3 (by 23 %) or more is sharp
 
 
 def _mean_t95(rows, family) -> dict:
@@ -304,9 +304,10 @@ def check_findings(rows) -> list:
     AR-1's sharp drop at 2 Umf, lift and torque (and their effect shrinking at the highest velocity), SP
     against MP (slight; MP faster above 2 Umf), the terminal t95 and its change above 2.3 Umf; from the bed
     height: AR-4 beds expand more; from the gas snapshots: AR-1's void fractions more binary than AR-4's
-    (``void_fraction_binarity``, Fig. 7); and, in a study with a family ``ar1_paper`` (the paper's settings)
-    beside ``ar1``, whether fvdem's defaults change the mixing (not a finding of the paper: absent otherwise). A run still on its way (or not started) counts
-    once it has mixed; until then it is left out, not taken as unmixed."""
+    (``void_fraction_binarity``, Fig. 7); and, in a study with a family ``ar1_paper`` (the paper's
+    settings) beside ``ar1``, whether fvdem's defaults change the mixing (not a finding of the paper: absent
+    otherwise). A run still on its way (or not started) counts once it has mixed; until then it is left
+    out, not taken as unmixed."""
     rows = [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
     findings = [
         _compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
@@ -375,7 +376,6 @@ def _mixed_or_ended(r: dict) -> bool:
     """Whether the t95 chart shows a run: mixed (its t95 known), or ended unmixed (its end a lower bound of
     t95); a run still on its way and not yet mixed is left out (its current time bounds nothing yet)."""
     from ..analysis.mixing import mixing_time
-    from .reports import _series
     folder = Path(r["folder"])
     series = _series(folder)
     if series is None:

@@ -194,7 +194,7 @@ def archive(out, dest) -> list:
 def results(out, dest) -> Path:
     """The study's results as one JSON file ``dest`` (e.g. ``docs/data/mema2020.json``), rebuilt from the
     study folder or its archive (its report first): ``study``, ``file``, ``date``, ``code`` (the commits the
-    runs ran with, shortest first mention of each), ``machine`` (hosts, threads, libraries of the runs),
+    runs ran with, short, and how many runs each), ``machine`` (hosts, threads, libraries of the runs),
     ``ran`` (how many runs reached their end, how many are on the way, how many have not started), ``runs``
     (the table's rows without folders) and ``findings`` (the report's, if it has them). Returns ``dest``."""
     import datetime
@@ -210,7 +210,7 @@ def results(out, dest) -> Path:
         made = json.loads(summary.read_text()).get("provenance", {}) if summary.exists() else {}
         commands.append(made.get("command") or "")
         if made.get("commit"):
-            commits.setdefault(made["commit"][:7], []).append(r["name"])
+            commits[made["commit"][:7]] = commits.get(made["commit"][:7], 0) + 1
         if made.get("host"):
             hosts.add(f"{made['host']} ({made.get('threads')} thread(s) a run)")
             libraries.add(", ".join(f"{k} {made[k]}" for k in ("fvdem", "python", "numpy", "numba", "fipy") if k in made))
@@ -221,7 +221,7 @@ def results(out, dest) -> Path:
     study = {
         "study": index.get("study"), "file": index.get("file") or _study_file(commands),
         "date": datetime.date.today().isoformat(),
-        "code": {commit: f"{len(names)} run(s)" for commit, names in commits.items()},
+        "code": {commit: f"{count} run(s)" for commit, count in commits.items()},
         "machine": {"hosts": sorted(hosts), "libraries": sorted(libraries)},
         "ran": f"{ended} of {len(rows)} runs reached their end, {started} on the way, "
                f"{len(rows) - ended - started} not started"
