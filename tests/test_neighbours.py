@@ -114,6 +114,55 @@ def test_history_survives_rebuilds():
                                rtol=1e-10, atol=1e-12)
 
 
+def test_histories_follow_their_pairs_through_a_resorted_list():
+    """``carry_history`` against the plain search it replaced: every new slot's pair looked up in the old
+    rows of either particle (the history negated when the owner changed, new pairs at zero), on random
+    half lists before and after a random permutation that keeps most pairs, drops some and adds others."""
+    from fvdem.dem.neighbours import carry_history, row_offsets
+    rng = np.random.default_rng(7)
+    n = 60
+    pairs = {tuple(sorted(rng.choice(n, 2, replace=False))) for _ in range(400)}
+    old_pairs = sorted(pairs)
+    flags = {pair: rng.random() < 0.4 for pair in old_pairs}  # touching: a history; the rest hold zeros
+    history = {pair: (np.append(rng.normal(size=3), 1.0) if flags[pair] else np.zeros(4)) for pair in old_pairs}
+
+    def csr(pair_list, count):
+        rows = [[] for _ in range(count)]
+        for a, b in pair_list:
+            rows[min(a, b)].append(max(a, b))
+        for row in rows:
+            rng.shuffle(row)  # cell-scan order, not sorted
+        start = row_offsets(np.array([len(r) for r in rows], np.int64))
+        return start, np.array([j for r in rows for j in r], np.int32), rows
+
+    old_start, old_neighbours, old_rows = csr(old_pairs, n)
+    old_history = np.array([history[(i, j)] for i in range(n) for j in old_rows[i]]).reshape(-1, 4)
+    new_to_old = rng.permutation(n)
+    old_to_new = np.empty(n, np.int64)
+    old_to_new[new_to_old] = np.arange(n)
+    kept = [p for p in old_pairs if flags[p] or rng.random() < 0.7]  # every touching pair stays listed
+    added = [tuple(rng.choice(n, 2, replace=False)) for _ in range(50)]
+    new_pairs = {tuple(sorted((old_to_new[a], old_to_new[b]))) for a, b in kept + added}
+    new_start, new_neighbours, _ = csr(sorted(new_pairs), n)
+    new_history = np.zeros((len(new_neighbours), 4))
+    carry_history(old_start, old_neighbours, old_history, new_start, new_neighbours, new_history, old_to_new)
+
+    expected = np.zeros_like(new_history)  # the search it replaced
+    for i in range(n):
+        for slot in range(new_start[i], new_start[i + 1]):
+            oi, oj = new_to_old[i], new_to_old[new_neighbours[slot]]
+            for src in range(old_start[oi], old_start[oi + 1]):
+                if old_neighbours[src] == oj:
+                    expected[slot] = old_history[src]
+            for src in range(old_start[oj], old_start[oj + 1]):
+                if old_neighbours[src] == oi:
+                    expected[slot, :3], expected[slot, 3] = -old_history[src, :3], old_history[src, 3]
+    assert np.array_equal(new_history, expected)
+    assert (new_history[:, 3] == 1.0).sum() == sum(flags.values()) > 100  # every contact found again
+    flipped = sum(old_to_new[a] > old_to_new[b] for (a, b) in old_pairs if flags[(a, b)])
+    assert flipped > 20  # owners changed for many: the negation is exercised
+
+
 def test_adapted_skin_converges_to_the_target_interval_within_bounds():
     """If a list lasts in proportion to its skin (ballistic motion), the rule reaches the target
     interval geometrically; each change is at most a factor 2 and the bounds hold."""

@@ -11,7 +11,7 @@ The list is stored compactly (CSR): row i's partners are ``neighbours[row_start[
 fixed-width rows the per-step working set of a 32,500-particle bed overflowed the L3 cache and
 every kernel became latency bound. Each contact's tangential history lives in its pair's slot; on
 a rebuild the histories are carried over to the new slots (through the particle permutation of the
-cell sort), with their sign flipped when the pair's owner changes. The rows are then cut into blocks
+cell sort), with their sign flipped when the pair's owner changes (``carry_history``). The rows are then cut into blocks
 of cell layers (``contact_blocks``) in which the contact kernel adds both sides of a pair straight onto
 the particles without write conflicts.
 """
@@ -214,35 +214,31 @@ def row_offsets(counts):
 
 
 @njit(cache=True, parallel=True)
-def transfer_history(old_start, old_neighbours, old_history, new_start, new_neighbours, new_history, new_to_old):
-    """Carry tangential histories from the old list to the new one.
+def carry_history(old_start, old_neighbours, old_history, new_start, new_neighbours, new_history, old_to_new):
+    """Carry tangential histories from the old list to the new one (``new_history`` zeroed beforehand).
 
-    ``new_to_old[k]`` is the old row of new particle k. A pair found in the old row of the
-    same owner keeps its history; one found in the partner's old row gets it negated (the
-    history is the displacement of the owner relative to the partner; the contact flag in column 3
-    is copied). New pairs start at 0.
+    Only a pair whose contact flag (history column 3) is set has a history: a listed pair that does not
+    touch holds zeros (``forces._forget``). So each such old pair is looked up in the new list, in the row
+    of its new owner (the lower of its particles' new indices; ``old_to_new[k]`` is old particle k's new
+    row), and its history copied there, negated (columns 0-2) when the owner changed: the history is the
+    displacement of the owner relative to the partner. Pairs no longer listed (none that touch: the list
+    is complete) are dropped, new pairs keep their zeros. The same histories as searching every new slot's
+    pair in the old rows, for about a third of the listed pairs: a fluidized rod has 2-3 touching pairs of
+    7 listed. Each new slot receives at most one old pair, so the rows run in parallel without conflicts.
     """
-    n = new_start.shape[0] - 1
-    for i in prange(n):
-        oi = new_to_old[i]
-        for slot in range(new_start[i], new_start[i + 1]):
-            oj = new_to_old[new_neighbours[slot]]
-            for c in range(4):
-                new_history[slot, c] = 0.0
-            found = False
-            for src in range(old_start[oi], old_start[oi + 1]):
-                if old_neighbours[src] == oj:
-                    for c in range(4):
-                        new_history[slot, c] = old_history[src, c]
-                    found = True
+    for oi in prange(old_start.shape[0] - 1):
+        ni = old_to_new[oi]
+        for src in range(old_start[oi], old_start[oi + 1]):
+            if old_history[src, 3] == 0.0:
+                continue
+            nj = old_to_new[old_neighbours[src]]
+            owner, partner, sign = (ni, nj, 1.0) if ni < nj else (nj, ni, -1.0)
+            for slot in range(new_start[owner], new_start[owner + 1]):
+                if new_neighbours[slot] == partner:
+                    for c in range(3):
+                        new_history[slot, c] = sign * old_history[src, c]
+                    new_history[slot, 3] = old_history[src, 3]  # the contact flag has no sign
                     break
-            if not found:
-                for src in range(old_start[oj], old_start[oj + 1]):
-                    if old_neighbours[src] == oi:
-                        for c in range(3):
-                            new_history[slot, c] = -old_history[src, c]
-                        new_history[slot, 3] = old_history[src, 3]  # the contact flag has no sign
-                        break
 
 
 @njit(cache=True)

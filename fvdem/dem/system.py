@@ -26,8 +26,8 @@ from ..timing import Timings
 from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
 from .forces import contact_forces
 from .integrate import kick, kick_drift
-from .neighbours import (build_half_list, cell_indices, cell_starts, compact_rows, contact_blocks,
-                         permute_wall_history, row_offsets, transfer_history, wrap_periodic)
+from .neighbours import (build_half_list, carry_history, cell_indices, cell_starts, compact_rows, contact_blocks,
+                         permute_wall_history, row_offsets, wrap_periodic)
 from .particles import ParticleArrays
 
 
@@ -298,8 +298,10 @@ class DEMSystem:
         row_start = row_offsets(counts)
         neighbours = np.empty(row_start[-1], np.int32)
         compact_rows(self._row_buffer, counts, row_start, neighbours)
-        history = np.empty((len(neighbours), HISTORY_COLUMNS))
-        transfer_history(self.row_start, self.neighbours, self.history, row_start, neighbours, history, order)
+        history = np.zeros((len(neighbours), HISTORY_COLUMNS))
+        old_to_new = np.empty(n, np.int64)
+        old_to_new[order] = np.arange(n)
+        carry_history(self.row_start, self.neighbours, self.history, row_start, neighbours, history, old_to_new)
         self.row_start, self.neighbours, self.history = row_start, neighbours, history
         self._cut_blocks()
         self.reference_position[:] = p.position
