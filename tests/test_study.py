@@ -227,6 +227,7 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     # the bed's surface over the second half (the summary's packed-bed height of 0.2 m is not a
     # fluidized bed's height)
     assert row["bed_height"] == pytest.approx(np.mean(top[half]))
+    assert row["bed_expansion"] == pytest.approx(np.mean(top[half]) / 0.3)  # over the bed it started as
 
 
 def test_the_papers_findings_are_checked_from_the_t95_table():
@@ -266,9 +267,9 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
 def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expansion_findings():
     from fvdem.study import check_findings
 
-    def row(family, ratio, t95, end=8.0, height=None):
+    def row(family, ratio, t95, end=8.0, height=None):  # height: the bed's expansion
         return {"family": family, "status": "finished", "gas.u_over_umf": ratio, "t95": t95,
-                "simulated_seconds": end, "bed_height": height}
+                "simulated_seconds": end, "bed_expansion": height}
 
     def found(rows):
         return {f["finding"].split(" (")[0]: f for f in check_findings(rows)}

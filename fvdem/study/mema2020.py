@@ -26,6 +26,13 @@ def _bed_surface(series):
     return float(np.mean(series["bed_top"][times >= 0.5 * times[-1]]))
 
 
+def _bed_expansion(series):
+    """The bed's expansion: its height (``_bed_surface``) over ``bed_top`` at the run's start (the settled bed
+    it started from); None without it."""
+    surface = _bed_surface(series)
+    return None if surface is None or series["bed_top"][0] <= 0 else surface / float(series["bed_top"][0])
+
+
 def _inlet_passes_umf(folder: Path) -> float | None:
     """When [s] a run's inlet velocity reaches the Umf its ``u_over_umf`` refers to: ``inlet_ramp / u_over_umf``
     for a linear ramp from 0 (0 for a full-speed start); None without a readable case or a U/Umf."""
@@ -275,11 +282,12 @@ def _gap_shrinks(rows, slow, fast, claim) -> dict:
 
 
 def _expansion(rows) -> dict:
-    """AR-4 MP beds expand more than AR-1 beds at the same U/Umf (§5.1): the bed's height (``bed_top`` over
-    the second half of each run that reached its end) higher at every velocity both ran."""
+    """AR-4 MP beds expand more than AR-1 beds at the same U/Umf (§5.1): the bed's expansion (its height,
+    ``bed_top`` over the second half of each run that reached its end, over its settled height at the start;
+    ``_bed_expansion``) larger at every velocity both ran."""
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf"
-    ended = [r for r in rows if r["status"] in ENDED and r.get("bed_height") is not None]
-    a, b = _by_velocity(ended, "ar4_mp", "bed_height"), _by_velocity(ended, "ar1", "bed_height")
+    ended = [r for r in rows if r["status"] in ENDED and r.get("bed_expansion") is not None]
+    a, b = _by_velocity(ended, "ar4_mp", "bed_expansion"), _by_velocity(ended, "ar1", "bed_expansion")
     common = sorted(set(a) & set(b))
     if not common:
         return {"finding": claim, "verdict": "open", "why": "no velocity where AR-1 and AR-4 MP both ran to their end"}
@@ -289,7 +297,8 @@ def _expansion(rows) -> dict:
         values[f"{v:g}"] = {"ar4_mp": a[v], "ar1": b[v]}
         if abs(ma - mb) < CLOSE * max(ma, mb) and min(len(a[v]), len(b[v])) < 2:
             why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas")
-    rule = "mean bed height (bed_top, second half of the run) of AR-4 MP above AR-1's at every velocity both ran"
+    rule = ("mean bed expansion (bed_top over the second half of the run over its settled value) of AR-4 MP above "
+            "AR-1's at every velocity both ran")
     if why:
         return {"finding": claim, "verdict": "open", "why": "; ".join(why) + " (too noisy to tell)", "values": values,
                 "rule": rule}
@@ -411,7 +420,7 @@ def _figures(out: Path, runs: list) -> list:
 
 def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     """t95 and t95 counted from when the inlet passes Umf, the bed's pressure drop over W/A and its
-    fluctuation, the bed height, the mixing entropy at the end and the void fractions' binarity."""
+    fluctuation, the bed height and expansion, the mixing entropy at the end and the void fractions' binarity."""
     record = void_fraction_record(folder) if r["status"] != "failed" else None
     passes = _inlet_passes_umf(folder)
     t95 = r.get("t95")
@@ -421,7 +430,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
             "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
                                               if "bed_pressure_drop_std_second_half" in data
                                               else data.get("pressure_drop_std_over_weight")),
-            "bed_height": _bed_surface(series),
+            "bed_height": _bed_surface(series), "bed_expansion": _bed_expansion(series),
             "final_mixing_entropy": (float(series["mixing_entropy"][-1])
                                      if series is not None and "mixing_entropy" in series else None),
             "void_fraction_binarity": None if record is None else record["binarity"]}
