@@ -865,7 +865,7 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     first = [_priority(r) for r in study.runs if r.replica == 1]
     second = [_priority(r) for r in study.runs if r.replica == 2]
     assert min(first) > max(second)
-    assert max(first) == 16.0 / 5e-5  # then longest first within a replica (the [[durations]] points: 16 s)
+    assert max(first) == 20.0 / 5e-5  # then longest first within a replica (the [[durations]] points: 20 s)
     beds = {b.name: _bed_priority(b) for b in study.beds}
     assert set(beds) == {"ar1", "ar4", "ar1_r2", "ar4_r2"}
     assert min(beds["ar1"], beds["ar4"]) > max(first)
