@@ -739,6 +739,21 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     files = [p for p in dest.rglob("*") if p.is_file()]
     assert not [p for p in files if p.suffix in (".vtu", ".npz", ".pvd")]
     assert sum(p.stat().st_size for p in files) < 400_000
+    # the study raised a run's duration after it ended ([[durations]]): archived again, the archive says so,
+    # and its report shows the run with more to run (not as ended)
+    index = json.loads((out / "study.json").read_text())
+    index["runs"][0]["duration"] = 8.0
+    (out / "study.json").write_text(json.dumps(index))
+    assert main(["study", str(out), "--archive", str(dest)]) == 0
+    raised = {r["name"]: r for r in json.loads((dest / "table.json").read_text())}
+    assert raised[runs[0]["name"]]["status"] == "pending" and raised[runs[0]["name"]]["duration"] == 8.0
+    assert raised[runs[1]["name"]]["status"] == "finished"
+    index["runs"][0].pop("duration")
+    (out / "study.json").write_text(json.dumps(index))
+    json_index = json.loads((dest / "study.json").read_text())
+    json_index["runs"][0].pop("duration")
+    (dest / "study.json").write_text(json.dumps(json_index))
+    assert main(["study", str(dest), "--report"]) == 0
     shutil.rmtree(out)  # the run folders are gone: the archive alone
     assert main(["study", str(dest), "--report"]) == 0
     again = json.loads((dest / "table.json").read_text())

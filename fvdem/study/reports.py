@@ -157,11 +157,17 @@ def archive(out, dest) -> list:
         series = _series(folder)
         if series is None:  # listed without a folder (not started yet): the archive still counts every run
             runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}", "simulated_seconds": 0.0})
+            _refresh_duration(runs[r["name"]], r)
             continue
         target = dest / "runs" / r["name"]
         held = _simulated_so_far(target, live=True) if target.exists() else -1.0
         if float(series["time"][-1]) <= held:
-            continue  # what the archive holds is as far along (a later invocation lost nothing)
+            # what the archive holds is as far along (a later invocation lost nothing); the study's word on
+            # the run (its status, its duration) is refreshed where the folder holds as much as the archive
+            if float(series["time"][-1]) == held:
+                runs[r["name"]] = {**r, "folder": f"runs/{r['name']}", "simulated_seconds": held}
+            _refresh_duration(runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}"}), r)
+            continue
         target.mkdir(parents=True, exist_ok=True)
         columns = [c for c in ("time", *chosen.archived_columns) if c in series]
         rows = zip(*(series[c] for c in columns))
@@ -186,6 +192,12 @@ def archive(out, dest) -> list:
     if (out / "study.toml").exists():
         (dest / "study.toml").write_text((out / "study.toml").read_text())
     return written + report(dest)
+
+
+def _refresh_duration(entry: dict, current: dict) -> None:
+    """An archived run's duration as the study now sets it (a ``[[durations]]`` table may have raised it)."""
+    if current.get("duration") is not None:
+        entry["duration"] = current["duration"]
 
 
 # --------------------------------------------------------------------------- the results as one file
