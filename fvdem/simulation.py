@@ -98,9 +98,11 @@ class Simulation:
         self._stop_requested = True
 
     def run(self, duration: float | None = None) -> dict:
-        """Advance ``duration`` [s] of simulated time (default: to ``time.end``), or until settled /
-        stopped. Returns the summary dictionary (also written as summary.json with an output folder)."""
+        """Advance ``duration`` [s] (default: to ``time.end``), or until the scene ends the run (settled, mixed)
+        or it is stopped. Returns the summary dictionary (also written as summary.json with an output folder)."""
         end_time = self.case.time.end if duration is None else self.time + duration
+        if self.run_state.ended:  # ended before (e.g. resumed): still, under this case's criteria?
+            self.run_state.ended = self.scene.ends(self.model, self.diagnostics(), self.run_state.histories)
         end_step = int(round(end_time / self.time_step))
         start_step = self.step_count
         bar = progress_bar(end_time, self.time, f"{self.case.name} (simulated s)") if self.progress else None
@@ -123,12 +125,12 @@ class Simulation:
         if self.out is not None:
             self._write_guarded(self._write_checkpoint)
             self._write_guarded(write_final, self.out, self.particles, summary)
-            self.log.end(summary, self._stop_requested, self.run_state.settled)
+            self.log.end(summary, self._stop_requested, self.run_state.ended)
         return summary
 
     def _advance_to(self, end_step: int, bar, wall0: float, start_step: int) -> None:
         """The loop: chunks of steps up to the next event, the events, the progress bar and log."""
-        while self.step_count < end_step and not self._stop_requested and not self.run_state.settled:
+        while self.step_count < end_step and not self._stop_requested and not self.run_state.ended:
             step = self.step_count
             target = min(end_step, self._next_event(step), step + 500)
             chunk_start = _time.process_time()
@@ -148,7 +150,8 @@ class Simulation:
     def summary(self, steps: int = 0, wall: float = 0.0) -> dict:
         """The run's summary: time, steps, cost, and what the scene's observables derive."""
         summary = {"case": self.case.name, "simulated_time": self.time, "steps": self.step_count,
-                   "settled": self.run_state.settled, "stopped_early": self._stop_requested, "threads": self.threads,
+                   "settled": self.run_state.ended == "settled", "ended": self.run_state.ended or None,
+                   "stopped_early": self._stop_requested, "threads": self.threads,
                    "wall_seconds": self.run_state.wall_seconds, "cpu_seconds": self.run_state.cpu_seconds,
                    "timings": self.model.timings.table(self.run_state.wall_seconds),
                    "provenance": provenance(self.threads), "peak_memory_mb": peak_memory_mb()}
@@ -158,7 +161,7 @@ class Simulation:
 
     # ------------------------------------------------------------------ events
     def _next_event(self, step: int) -> int:
-        if self.out is None:  # the samples still feed the settled test and the histories the summary reads
+        if self.out is None:  # the samples still feed the end tests and the histories the summary reads
             samples = self.case.time.stop_when_settled or self.scene.keeps_history
             return self.schedules["timeseries"].next_after(step) if samples else step + 10**9
         return min(s.next_after(step) for s in self.schedules.values())
@@ -173,10 +176,7 @@ class Simulation:
             self.scene.record(self.model, values, self.run_state.histories)
             if self.out is not None:
                 self._timeseries.append(values)
-            t = self.case.time
-            if (self.dem is not None and t.stop_when_settled and self.time >= t.min_time and step > 0
-                    and values["rms_speed"] < t.settled_speed):
-                self.run_state.settled = True
+            self.run_state.ended = self.scene.ends(self.model, values, self.run_state.histories)
         if self.out is None:
             return
         if self.case.output.vtk and self.schedules["snapshot"].due(step):

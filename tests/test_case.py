@@ -55,6 +55,9 @@ def fvdem_cli(*args, cwd=None):
     (("count = 50", "count = 50\nshape = \"cube\""), ["particles.shape = 'cube'", "'sphere', 'spherocylinder'"]),
     (("upper = [0.05, 0.05, 0.1]", "upper = [0.05, 0.05]"), ["domain.upper", "a list of 3 numbers"]),
     (("[output]", "[outptu]"), ["outptu", "unknown key", "did you mean 'output'"]),
+    (("end = 0.002", "end = 0.002\nstop_after_mixed = -1.0"), ["time.stop_after_mixed = -1.0", ">= 0"]),
+    (('diameter = "5.3 mm"\n[time]\nend = 0.002', 'diameter = "5.3 mm"\ncolour = "single"\n[time]\nend = 0.002\n'
+      "stop_after_mixed = 2.0"), ["time.stop_after_mixed = 2", "two colours", "particles.colour = 'by_height'"]),
 ])
 def test_bad_case_is_refused_with_key_value_and_rule(tmp_path, edit, expected):
     path = write_case(tmp_path, SMALL.replace(*edit, 1))

@@ -53,6 +53,33 @@ def test_resume_equals_uninterrupted(tmp_path):
     assert ts_a == ts_b
 
 
+def test_a_run_ends_stop_after_mixed_past_its_mixing_time_and_a_raised_margin_runs_it_on(tmp_path):
+    """``time.stop_after_mixed``: the run ends that long after t95 instead of at ``time.end`` (here t95 = 0:
+    one analysis cell holds both colours, entropy 1 from the start), and says why; resumed under the same case
+    it stays ended (no step), with a larger margin it runs on to it, bit-for-bit as a run straight there."""
+    path = tmp_path / "case.toml"
+    path.write_text(CASE)
+    mixed = {"output.mixing_cells": [1, 1, 1], "time.stop_after_mixed": 0.01, "output.vtk": False}
+    out = tmp_path / "mixed"
+    summary = fvdem.Simulation(fvdem.load_case(path, mixed), out).run()
+    assert summary["t95"] == 0.0 and summary["ended"] == "mixed" and not summary["settled"]
+    assert summary["simulated_time"] == pytest.approx(0.01) and summary["steps"] == 200
+    assert "ended time.stop_after_mixed past its mixing time (t95 0 s)" in (out / "run.log").read_text()
+    again = fvdem.Simulation(fvdem.load_case(path, mixed), out, resume=True).run()
+    assert again["steps"] == 200 and again["ended"] == "mixed"
+    later = {**mixed, "time.stop_after_mixed": 0.02}
+    resumed = fvdem.Simulation(fvdem.load_case(path, later), out, resume=True).run()
+    assert resumed["simulated_time"] == pytest.approx(0.02) and resumed["ended"] == "mixed"
+    fvdem.Simulation(fvdem.load_case(path, later), tmp_path / "straight").run()
+    a, b = final_state(tmp_path / "straight"), final_state(out)
+    for key in a:
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+    assert (tmp_path / "straight" / "timeseries.csv").read_text() == (out / "timeseries.csv").read_text()
+    # without it the run goes to time.end (0.03 s)
+    free = fvdem.Simulation(fvdem.load_case(path, {**mixed, "time.stop_after_mixed": None}), out, resume=True).run()
+    assert free["ended"] is None and free["simulated_time"] == pytest.approx(0.03)
+
+
 def test_torn_checkpoint_write_leaves_previous_checkpoint_usable(tmp_path):
     path = tmp_path / "case.toml"
     path.write_text(CASE)
@@ -260,12 +287,14 @@ def test_a_checkpoint_of_the_former_layout_is_read_into_the_scenes_histories():
               "pressure_history": [[0.1, 900.0]], "mixing_history": [[0.0, 0.1], [0.1, 0.2]],
               "suspension_history": [[0.1, 15.0, 0.01, 0.002, 0.001]], "orientation_history": [[0.1, 0.5, 0.7]]}
     now = upgrade_writer_state(former)
-    assert now == {"wall_seconds": 1.5, "cpu_seconds": 2.5, "settled": False,
+    assert now == {"wall_seconds": 1.5, "cpu_seconds": 2.5, "ended": "",
                    "snapshots": {"particles": [[0.0, "particles_00000.vtu"]], "gas": [[0.0, "gas_00000.vtu"]]},
                    "histories": {"bed_pressure": [[0.1, 900.0]], "mixing": [[0.0, 0.1], [0.1, 0.2]],
                                  "suspension": {"samples": [[0.1, 15.0, 0.01, 0.002, 0.001]],
                                                 "orientations": [[0.1, 0.5, 0.7]]}}}
     assert upgrade_writer_state(now) == now
+    # a bed that settled before the scenes' end tests (0.2.0) ended "settled"
+    assert upgrade_writer_state({"settled": True})["ended"] == "settled"
 
 
 def test_a_signal_while_the_run_is_set_up_stops_it_cleanly(tmp_path, monkeypatch, capsys):

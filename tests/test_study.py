@@ -775,18 +775,66 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert main(["study", str(tmp_path), "--results", str(tmp_path / "r.json")]) == 2  # not a study folder
 
 
-def test_the_t95_chart_shows_runs_that_mixed_or_ended_not_runs_on_their_way(tmp_path):
-    from fvdem.study.mema2020 import _mixed_or_ended
-    mixed, slow = tmp_path / "mixed", tmp_path / "slow"
+def test_the_t95_chart_shows_runs_that_mixed_or_ended_not_runs_on_their_way(tmp_path, monkeypatch):
+    """``report`` derives each run's status once, and the t95 chart takes the runs that mixed or ended unmixed
+    (the end a lower bound of t95), not those with more to run; a run that ended early, mixed
+    ``time.stop_after_mixed`` before, has ended (not "pending" short of its duration)."""
+    import fvdem.analysis.plots as plots
+    from fvdem.study import report
+    drawn = []
+    monkeypatch.setattr(plots, "plot_t95", lambda folders, path, names=None: drawn.append(
+        sorted(Path(f).name for f in folders)) or path)
+    out = tmp_path / "study"
+    mixed, slow = out / "runs" / "mixed", out / "runs" / "slow"
     _fake_run(mixed, "ar1", 2.0, 1.2, [0.5])  # entropy 0.95 at 2.5 s
     _fake_run(slow, "ar1", 1.6, 0.1, [0.5])  # 0.33 at its end, 4 s
-    assert _mixed_or_ended({"folder": str(mixed)}) and _mixed_or_ended({"folder": str(slow)})
-    assert not _mixed_or_ended({"folder": str(slow), "duration": 8.0})  # its duration raised: more to run
+    summary = json.loads((mixed / "summary.json").read_text())
+    (mixed / "summary.json").write_text(json.dumps({**summary, "t95": 2.5}))
+
+    def chart(slow_status="finished", **entries):
+        runs = [{"name": name, "family": "ar1", "status": status, "folder": str(folder), "t95": t95,
+                 "point": {"gas.u_over_umf": ratio}, **entries.get(name, {})}
+                for name, folder, ratio, t95, status in (("mixed", mixed, 2.0, 2.5, "finished"),
+                                                         ("slow", slow, 1.6, None, slow_status))]
+        (out / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+        drawn.clear()
+        report(out)
+        return drawn[-1] if drawn else [], {r["name"]: r["status"] for r in json.loads((out / "table.json").read_text())}
+
+    assert chart() == (["mixed", "slow"], {"mixed": "finished", "slow": "finished"})
+    # its duration raised: more to run
+    assert chart(slow={"duration": 8.0}) == (["mixed"], {"mixed": "finished", "slow": "pending"})
+    # ended early by time.stop_after_mixed (2.5 s + 1.5 s): ended, short of its duration
+    (mixed / "summary.json").write_text(json.dumps({**summary, "t95": 2.5, "ended": "mixed"}))
+    assert chart(mixed={"duration": 8.0}) == (["mixed", "slow"], {"mixed": "finished", "slow": "finished"})
     summary = json.loads((slow / "summary.json").read_text())
     (slow / "summary.json").write_text(json.dumps({**summary, "stopped_early": True}))
-    assert not _mixed_or_ended({"folder": str(slow)})  # stopped on its way
+    assert chart("stopped")[0] == ["mixed"]  # stopped on its way
     (slow / "summary.json").unlink()
-    assert not _mixed_or_ended({"folder": str(slow)}) and _mixed_or_ended({"folder": str(mixed)})
+    assert chart("pending")[0] == ["mixed"]  # on its way, its first segment
+
+
+def test_a_run_that_ended_mixed_is_done_until_its_margin_is_raised(tmp_path):
+    """The study skips a run its case ended early (``time.stop_after_mixed`` past t95; a bed at rest) while the
+    case still asks for that end; a raised margin, or none, has it resume."""
+    from types import SimpleNamespace
+
+    from fvdem.study.tasks import _finished
+
+    def case(margin=None, settled=False):
+        return SimpleNamespace(time=SimpleNamespace(end=8.0, stop_when_settled=settled, stop_after_mixed=margin))
+
+    def summary(**values):
+        (tmp_path / "summary.json").write_text(json.dumps({"simulated_time": 5.5, "stopped_early": False, **values}))
+
+    summary(ended="mixed", t95=3.5)
+    assert _finished(tmp_path, case(2.0)) and not _finished(tmp_path, case(3.0)) and not _finished(tmp_path, case())
+    summary(ended="mixed", t95=3.5, stopped_early=True)
+    assert not _finished(tmp_path, case(2.0))
+    summary(settled=True)  # a bed from before the summary said why it ended (0.2.0)
+    assert _finished(tmp_path, case(settled=True)) and not _finished(tmp_path, case())
+    summary(simulated_time=8.0, ended=None)
+    assert _finished(tmp_path, case())
 
 
 def _study_table(**changes):

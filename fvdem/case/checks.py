@@ -81,6 +81,9 @@ def _cross_checks(case: Case, problems: list) -> None:
         problems.append(f"domain.upper = {list(upper)}: must exceed domain.lower = {list(lower)} on every axis")
         return
     _gas_checks(case, problems)
+    if case.time.stop_after_mixed is not None and (case.particles.count == 0 or case.particles.colour != "by_height"):
+        problems.append(f"time.stop_after_mixed = {case.time.stop_after_mixed:g}: the mixing entropy needs two "
+                        "colours (particles.colour = 'by_height'); remove the key or colour the particles")
     if case.particles.count == 0:
         return
     p = case.particles

@@ -150,6 +150,9 @@ class TimeConfig:
     settled_speed: float = spec(0.005, unit="velocity", gt=0.0,
                                 doc="'at rest' means a root-mean-square particle speed below this [m/s]")
     min_time: float = spec(0.0, unit="time", ge=0.0, doc="never stop as settled before this time [s]")
+    stop_after_mixed: float | None = spec(None, unit="time", ge=0.0, optional=True,
+                                          doc="end this long after the mixing entropy first reaches 0.95 (t95) "
+                                              "[s]; needs particles.colour = 'by_height' (default: run to time.end)")
 
 
 @dataclass(frozen=True)

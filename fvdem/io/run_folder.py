@@ -27,6 +27,7 @@ FINAL_STATE = "final_state.npz"
 # the corrector tolerance moves only the intermediate PISO correctors, the fields by ~1e-8 relative, while the
 # last corrector keeps linear_tolerance)
 RESUME_SAFE = ("name", "description", "time.end", "time.stop_when_settled", "time.settled_speed", "time.min_time",
+               "time.stop_after_mixed",
                "output.", "run.", "gas.pressure_preconditioner", "gas.corrector_tolerance")
 
 
@@ -50,7 +51,7 @@ class RunState:
     histories: dict = field(default_factory=dict)  # observable name -> its history
     wall_seconds: float = 0.0
     cpu_seconds: float = 0.0
-    settled: bool = False
+    ended: str = ""  # why the run ended before its end time: a scene's end test ("settled", "mixed"), else ""
     timings: dict = field(default_factory=dict)  # phase -> seconds (fvdem.timing)
 
     @classmethod
@@ -156,6 +157,8 @@ def upgrade_writer_state(meta: dict) -> dict:
     for old, (table, name) in _FORMER.items():
         if old in meta:
             tables[table][name] = meta.pop(old)
+    if "settled" in meta:  # before the scenes' end tests (0.2.0): a bed at rest was the only early end
+        meta["ended"] = "settled" if meta.pop("settled") else ""
     samples, orientations = meta.pop("suspension_history", None), meta.pop("orientation_history", [])
     if samples:
         tables["histories"]["suspension"] = {"samples": samples, "orientations": orientations}

@@ -32,11 +32,12 @@ class RunLog:
         self.line(f"{'started' if resumed_at is None else 'resumed at t = %.6g s' % resumed_at}: {case_name}, "
                   f"{made_by}")
 
-    def end(self, summary: dict, stopped: bool, settled: bool) -> None:
-        """How the run ended and its timing table."""
+    def end(self, summary: dict, stopped: bool, ended: str) -> None:
+        """How the run ended (``ended``: a scene's early end, "settled" or "mixed", else "") and its timing table."""
         from ..timing import format_table
         how = ("stopped (checkpoint written; resume with --resume)" if stopped else
-               "settled" if settled else "reached its end")
+               f"ended time.stop_after_mixed past its mixing time (t95 {summary.get('t95', 0.0):.4g} s)"
+               if ended == "mixed" else ended or "reached its end")
         self.line(f"{how} at t = {summary['simulated_time']:.6g} s after {summary['wall_seconds']:.0f} s wall in all")
         self.line(format_table(summary["timings"], summary["threads"], summary["steps"], summary["simulated_time"]))
 

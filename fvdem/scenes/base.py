@@ -3,8 +3,9 @@
 An ``Observable`` is one small measurement with its computation beside it: the ``timeseries.csv``
 columns it writes, the values it ``measure``s at each sample (read by later observables, the
 stop test and the writers), a ``history`` it keeps over the run (saved in checkpoints, so a resumed
-run continues it), the ``summary.json`` entries it derives, and the names of the report plots that
-show it (``fvdem.analysis.plots.PLOTS``). It only reads the model.
+run continues it), the ``summary.json`` entries it derives, whether the run ends early (``ends``: the
+bed at rest, the colours mixed) and the names of the report plots that show it
+(``fvdem.analysis.plots.PLOTS``). It only reads the model.
 
 A ``Scene`` is the kind of run (fluidized bed, periodic suspension, fixed bed, settling) as a value: a
 name and the observables it measures. ``scene_for(case)`` gives a case's scene: the first registered
@@ -41,6 +42,11 @@ class Observable:
         """``summary.json`` entries; ``run`` holds ``steps`` and ``wall`` of the last ``run`` call."""
         return {}
 
+    def ends(self, model, values: dict, history) -> str:
+        """Why the run ends now, before its end time (a case's stop criterion this observable measures: the
+        bed at rest, the colours mixed), else ""; tested at each sample after ``record``."""
+        return ""
+
 
 @dataclass(frozen=True)
 class Scene:
@@ -71,6 +77,10 @@ class Scene:
         for observable in self.observables:
             out.update(observable.summary(model, values, histories.get(observable.name), run))
         return out
+
+    def ends(self, model, values: dict, histories: dict) -> str:
+        """The first early end an observable reports (``Observable.ends``), else ""."""
+        return next((why for o in self.observables if (why := o.ends(model, values, histories.get(o.name)))), "")
 
     @property
     def keeps_history(self) -> bool:

@@ -49,6 +49,13 @@ class Particles(Observable):
         out.update(packed_bed_summary(model.particles, model.dem.box))
         return out
 
+    def ends(self, model, values, history):
+        """``time.stop_when_settled``: "settled" once the rms speed is below ``time.settled_speed``, from
+        ``time.min_time`` on."""
+        t = model.case.time
+        return ("settled" if t.stop_when_settled and model.time >= t.min_time and model.step_count > 0
+                and values["rms_speed"] < t.settled_speed else "")
+
 
 class Gas(Observable):
     """Largest cell speed [m/s], mean pressure of the first cell layer [Pa]; in a walled column the
@@ -94,6 +101,7 @@ class Mixing(Observable):
 
     def __init__(self, case):
         self.cells = mixing_cells(case)
+        self._t95, self._scanned = None, False  # ``ends``: t95 once reached, the history searched
 
     def columns(self, model):
         return ("mixing_entropy", "lacey_index")
@@ -111,6 +119,22 @@ class Mixing(Observable):
         rows = np.asarray(history, float).reshape(-1, 2)
         return {"mixing_entropy": values["mixing_entropy"], "lacey_index": values["lacey_index"],
                 "mixing_cells": list(self.cells), "t95": mixing_time(rows[:, 0], rows[:, 1]) if len(rows) else None}
+
+    def ends(self, model, values, history):
+        """``time.stop_after_mixed``: "mixed" once that long has passed since t95."""
+        margin = model.case.time.stop_after_mixed
+        if margin is None or not history:
+            return ""
+        if self._t95 is None and (history[-1][1] >= 0.95 or not self._scanned):  # found once, then kept
+            rows = np.asarray(history, float)  # (the whole history once: a resumed run may have mixed before)
+            self._t95, self._scanned = mixing_time(rows[:, 0], rows[:, 1]), True
+        return "mixed" if past_mixing(self._t95, margin, model.time) else ""
+
+
+def past_mixing(t95, margin, time) -> bool:
+    """Whether ``time`` [s] is ``margin`` (``time.stop_after_mixed``) past the mixing time ``t95`` (None: not
+    mixed, no margin: never)."""
+    return t95 is not None and margin is not None and time >= t95 + margin - 1e-9
 
 
 class Coupling(Observable):

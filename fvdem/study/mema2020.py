@@ -10,7 +10,8 @@ import math
 from pathlib import Path
 
 from ..case import CaseError, load_case
-from .reports import ENDED, IN_PROGRESS, StudyReport, _series, register_report
+from .reports import StudyReport, register_report
+from .tasks import ENDED, FAILED, IN_PROGRESS
 
 
 def _bed_surface(series):
@@ -123,7 +124,7 @@ def _compare_binarity(rows) -> dict:
     claim = "AR-1 void fractions more binary than AR-4 (Fig. 7)"
     by = {}
     for r in rows:
-        if r["family"] in ("ar1", "ar4_mp") and r["status"] != "failed" and r.get("void_fraction_binarity") is not None:
+        if r["family"] in ("ar1", "ar4_mp") and r["status"] != FAILED and r.get("void_fraction_binarity") is not None:
             by.setdefault(r.get("gas.u_over_umf"), {}).setdefault(r["family"], []).append(r["void_fraction_binarity"])
     common = sorted(v for v, fam in by.items() if v is not None and len(fam) == 2)
     if not common:
@@ -165,7 +166,7 @@ def _by_velocity(rows, family, key):
     """``{U/Umf: [row[key], ...]}`` of the runs of a family that did not fail (replicas together)."""
     out = {}
     for r in rows:
-        if r["family"] == family and r["status"] != "failed" and "gas.u_over_umf" in r:
+        if r["family"] == family and r["status"] != FAILED and "gas.u_over_umf" in r:
             out.setdefault(r["gas.u_over_umf"], []).append(r.get(key))
     return out
 
@@ -382,19 +383,10 @@ def _live(series) -> dict:
 
 
 def _mixed_or_ended(r: dict) -> bool:
-    """Whether the t95 chart shows a run: mixed (its t95 known), or ended unmixed (its end a lower bound of
-    t95); a run still on its way and not yet mixed is left out (its current time bounds nothing yet)."""
-    from ..analysis.mixing import mixing_time
-    folder = Path(r["folder"])
-    series = _series(folder)
-    if series is None:
-        return False
-    if "mixing_entropy" in series and mixing_time(series["time"], series["mixing_entropy"]) is not None:
-        return True
-    summary = json.loads((folder / "summary.json").read_text()) if (folder / "summary.json").exists() else {}
-    end = float(summary.get("simulated_time") or 0.0)
-    return (bool(summary) and not summary.get("stopped_early") and float(series["time"][-1]) <= end + 1e-9
-            and end >= (r.get("duration") or 0.0) * (1 - 1e-9))
+    """Whether the t95 chart shows a run (``report`` derived its status): mixed (its t95 known), or ended
+    unmixed (its end a lower bound of t95); a run still on its way and not yet mixed is left out (its current
+    time bounds nothing yet)."""
+    return r.get("t95") is not None or r["status"] in ENDED
 
 
 def _figures(out: Path, runs: list) -> list:
@@ -421,7 +413,7 @@ def _figures(out: Path, runs: list) -> list:
 def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     """t95 and t95 counted from when the inlet passes Umf, the bed's pressure drop over W/A and its
     fluctuation, the bed height and expansion, the mixing entropy at the end and the void fractions' binarity."""
-    record = void_fraction_record(folder) if r["status"] != "failed" else None
+    record = void_fraction_record(folder) if r["status"] != FAILED else None
     passes = _inlet_passes_umf(folder)
     t95 = r.get("t95")
     return {"t95": t95, "inlet_passes_umf": passes,

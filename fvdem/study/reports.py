@@ -19,10 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from .tasks import _simulated_so_far
-
-ENDED = ("finished", "resumed", "skipped")  # a run's status once it reached its end
-IN_PROGRESS = ("pending", "stopped", "paused", "running")  # before it: "running" where its series passed its summary
+from .tasks import ENDED, FAILED, IN_PROGRESS, _simulated_so_far
 
 
 @dataclass(frozen=True)
@@ -95,9 +92,7 @@ def report(out) -> list:
     chosen = report_for(result.get("report"))
     for r in result["runs"]:  # an archive's folders are relative to it
         r["folder"] = str(out / r["folder"]) if not Path(r["folder"]).is_absolute() else r["folder"]
-    runs = [r for r in result["runs"] if r["status"] != "failed" and (Path(r["folder"]) / "timeseries.csv").exists()]
-    paths = list(chosen.figures(out, runs)) if chosen.figures else []
-    rows = []
+    rows, drawn = [], []
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
@@ -110,9 +105,11 @@ def report(out) -> list:
                 r = {**r, "status": "running"}
             data = _so_far(series, chosen)
             r = {**r, **(chosen.run_values(data) if chosen.run_values else {})}
-        elif r.get("duration") and r["status"] not in IN_PROGRESS and r["status"] != "failed" and \
+        elif r.get("duration") and r["status"] in ENDED and not data.get("ended") and \
                 float(data.get("simulated_time") or 0.0) < r["duration"] * (1 - 1e-9):
-            r = {**r, "status": "pending"}  # ended before its duration was raised: more to run
+            r = {**r, "status": "pending"}  # reached the end it had before its duration was raised: more to run
+        if r["status"] != FAILED and (Path(r["folder"]) / "timeseries.csv").exists():
+            drawn.append(r)  # the figures get each run with the status derived here (and its live values)
         row = {"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"]}
         if chosen.columns:
             row.update(chosen.columns(r, Path(r["folder"]), data, series))
@@ -120,6 +117,7 @@ def report(out) -> list:
                     "duration": r.get("duration"),
                     "replica": r.get("replica") or int((re.search(r"_r(\d+)$", r["name"]) or [0, 1])[1])})
         rows.append(row)
+    paths = list(chosen.figures(out, drawn)) if chosen.figures else []
     (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
     columns = list(dict.fromkeys(k for row in rows for k in row))
     lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
@@ -132,8 +130,8 @@ def report(out) -> list:
 
 
 # --------------------------------------------------------------------------- archive (compact results)
-ARCHIVED_SUMMARY = ("case", "simulated_time", "steps", "settled", "stopped_early", "threads", "wall_seconds",
-                    "cpu_seconds", "timings", "provenance", "peak_memory_mb")
+ARCHIVED_SUMMARY = ("case", "simulated_time", "steps", "settled", "ended", "stopped_early", "threads",
+                    "wall_seconds", "cpu_seconds", "timings", "provenance", "peak_memory_mb")
 
 
 def archive(out, dest) -> list:

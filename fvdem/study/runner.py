@@ -15,7 +15,7 @@ from ..case import CaseError, load_case
 from .cluster import close_client, make_client
 from .reports import report_for
 from .sweep import BedSpec, RunSpec, Study
-from .tasks import STOP_FILE, StudyStopped, _simulated_so_far, prepare_bed, run_task
+from .tasks import FAILED, STOP_FILE, StudyStopped, _ended_early, _simulated_so_far, prepare_bed, run_task
 
 
 MAX_STALLS = 3  # paused attempts in a row that started and made no progress: the walltime is too short
@@ -123,7 +123,9 @@ class _StudyProgress:
         self.is_tqdm = not hasattr(self.bar, "step")
 
     def _simulated(self) -> float:
-        return sum(min(r.duration, _simulated_so_far(Path(r.folder), live=True)) for r in self.study.runs)
+        """Simulated seconds done: a run that ended early (mixed: ``time.stop_after_mixed``) counts whole."""
+        return sum(r.duration if _ended_early(Path(r.folder))
+                   else min(r.duration, _simulated_so_far(Path(r.folder), live=True)) for r in self.study.runs)
 
     def update(self, runs_done: int) -> None:
         now = self._simulated()
@@ -246,7 +248,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                     run = run_of[future.key]
                     name = run.name
                     stopped = isinstance(exc, StudyStopped) or (out / STOP_FILE).exists()
-                    result = {"name": name, "family": run.family, "status": "stopped" if stopped else "failed",
+                    result = {"name": name, "family": run.family, "status": "stopped" if stopped else FAILED,
                               "folder": run.folder, "simulated_seconds": 0.0, "point": run.point,
                               **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
                 if result["status"] == "paused":
@@ -255,12 +257,12 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                         pending.add(retry)
                         write_index(out, study, [*results, result], description)
                         continue
-                    result = {**result, "status": "failed", "error": (
+                    result = {**result, "status": FAILED, "error": (
                         f"paused {MAX_STALLS} times in a row at t = {result['simulated_seconds']:.6g} s without "
                         "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
                         "it; raise the cluster's walltime or lower stop_before_walltime")}
                 results.append(result)
-                done += result.get("simulated_seconds", 0.0) if result["status"] != "failed" else 0.0
+                done += result.get("simulated_seconds", 0.0) if result["status"] != FAILED else 0.0
                 detail = result.get("error") or (chosen.headline(result) if chosen.headline else "")
                 bar.message(progress_line(len(results), len(study.runs), result["name"], result["status"], detail,
                                           started, done, total, " simulated s"))

@@ -18,13 +18,26 @@ if TYPE_CHECKING:
 
 STOP_FILE = "STOP"  # in a study folder: running runs checkpoint and stop, queued ones do not start
 
+# A run's status (study.json, the table): a task's result says "finished" or "resumed" (it reached its end in
+# this call), "skipped" (it had before), "stopped" or "paused" (checkpointed before its end: the study's stop
+# file, its job's walltime) or "failed" (with the cause); the study lists a run without a result "pending";
+# the report derives "running" (its time series has passed its summary) and "pending" (it ended before its
+# duration was raised)
+ENDED = ("finished", "resumed", "skipped")
+IN_PROGRESS = ("pending", "stopped", "paused", "running")
+FAILED = "failed"
+
 
 # s: how long a worker past its job's deadline holds a run it cannot start before it gives it back; the study
 # retires such a worker (``_retire``), so this only paces the returns when Dask declined to retire it
 PAUSED_RETURN_DELAY = 2.0
 
 
-def _finished(folder: Path, end: float) -> bool:
+def _finished(folder: Path, case) -> bool:
+    """Whether a run folder's summary shows the run at its end under ``case``: its end time reached, or ended
+    early by a criterion the case still sets (settled; mixed ``time.stop_after_mixed`` ago, that margin not
+    raised since)."""
+    from ..scenes.observables import past_mixing
     summary = folder / "summary.json"
     if not summary.exists():
         return False
@@ -32,7 +45,19 @@ def _finished(folder: Path, end: float) -> bool:
         data = json.loads(summary.read_text())
     except (OSError, json.JSONDecodeError):
         return False
-    return not data.get("stopped_early") and (data.get("settled") or data["simulated_time"] >= end * (1 - 1e-9))
+    t, ended = case.time, data.get("ended") or ("settled" if data.get("settled") else None)
+    return not data.get("stopped_early") and (
+        data["simulated_time"] >= t.end * (1 - 1e-9) or (ended == "settled" and t.stop_when_settled)
+        or (ended == "mixed" and past_mixing(data.get("t95"), t.stop_after_mixed, data["simulated_time"])))
+
+
+def _ended_early(folder: Path) -> bool:
+    """Whether a run ended before its end time by its case's own criterion (settled, mixed)."""
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        return False
+    return not data.get("stopped_early") and bool(data.get("ended"))
 
 
 def _study_stop_file(folder) -> Path:
@@ -79,7 +104,7 @@ def _simulate(case_path, overrides, folder, threads, deadline: float | None = No
     from ..simulation import Simulation
     folder = Path(folder)
     case = load_case(case_path, {**overrides, "output.progress": False})
-    if _finished(folder, case.time.end):
+    if _finished(folder, case):
         return {"status": "skipped", "summary": json.loads((folder / "summary.json").read_text())}
     stop_file = _study_stop_file(folder)
     so_far = {"simulated_time": _simulated_so_far(folder), "stopped_early": True}
@@ -141,7 +166,7 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
         outcome = _simulate(run.case, overrides, run.folder, threads, job_deadline())
     except Exception as exc:  # noqa: BLE001  (any failure of one run is reported, the others go on)
         from ..io.run_log import log_tail
-        return {"name": run.name, "family": run.family, "status": "failed", "error": f"{type(exc).__name__}: {exc}",
+        return {"name": run.name, "family": run.family, "status": FAILED, "error": f"{type(exc).__name__}: {exc}",
                 "folder": run.folder, "simulated_seconds": 0.0, "point": run.point,
                 "wall_seconds": time.perf_counter() - started, "log_tail": log_tail(run.folder)}
     summary = outcome["summary"]
