@@ -835,6 +835,16 @@ def test_a_run_that_ended_mixed_is_done_until_its_margin_is_raised(tmp_path):
     assert _finished(tmp_path, case(settled=True)) and not _finished(tmp_path, case())
     summary(simulated_time=8.0, ended=None)
     assert _finished(tmp_path, case())
+    # a study's run: ends mixed (t95 = 0 on one analysis cell) short of its duration, then skipped; resumed
+    # to a raised margin
+    out, run = _small_run(tmp_path / "s", 0.02)
+    mixed = replace(run, overrides={**run.overrides, "output.mixing_cells": [1, 1, 1], "time.stop_after_mixed": 0.004})
+    first = run_task(mixed, 1)
+    assert first["status"] == "finished" and first["ended"] == "mixed"
+    assert first["simulated_seconds"] == pytest.approx(0.004)
+    assert run_task(mixed, 1)["status"] == "skipped"
+    later = run_task(replace(mixed, overrides={**mixed.overrides, "time.stop_after_mixed": 0.008}), 1)
+    assert later["status"] == "resumed" and later["simulated_seconds"] == pytest.approx(0.008)
 
 
 def _study_table(**changes):

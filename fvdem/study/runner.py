@@ -262,7 +262,8 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                         "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
                         "it; raise the cluster's walltime or lower stop_before_walltime")}
                 results.append(result)
-                done += result.get("simulated_seconds", 0.0) if result["status"] != FAILED else 0.0
+                if result["status"] != FAILED:  # a run that ended early (mixed) did its whole share
+                    done += run_of[future.key].duration if result.get("ended") else result.get("simulated_seconds", 0.0)
                 detail = result.get("error") or (chosen.headline(result) if chosen.headline else "")
                 bar.message(progress_line(len(results), len(study.runs), result["name"], result["status"], detail,
                                           started, done, total, " simulated s"))

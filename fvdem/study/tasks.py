@@ -174,6 +174,7 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
     return {"name": run.name, "family": run.family, "status": outcome["status"],
             "folder": run.folder, "simulated_seconds": summary["simulated_time"], "point": run.point,
             **(chosen.run_values(summary) if chosen.run_values else {}),
+            **({"ended": summary["ended"]} if summary.get("ended") else {}),  # early, by its case: "mixed"
             "wall_seconds": time.perf_counter() - started,
             **({"started": outcome["started"], "worker": _worker_address()}
                if outcome["status"] == "paused" else {})}
