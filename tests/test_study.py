@@ -799,7 +799,8 @@ def test_the_t95_chart_shows_runs_that_mixed_or_ended_not_runs_on_their_way(tmp_
         (out / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
         drawn.clear()
         report(out)
-        return drawn[-1] if drawn else [], {r["name"]: r["status"] for r in json.loads((out / "table.json").read_text())}
+        table = json.loads((out / "table.json").read_text())
+        return drawn[-1] if drawn else [], {r["name"]: r["status"] for r in table}
 
     assert chart() == (["mixed", "slow"], {"mixed": "finished", "slow": "finished"})
     # its duration raised: more to run
