@@ -213,8 +213,10 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     drop = 1.0 + 0.3 * np.sin(5.0 * t)
     entropy = np.minimum(1.0, t / 2.0)
     top = 0.3 + 0.05 * np.sin(3.0 * t)
-    (folder / "timeseries.csv").write_text("time,mixing_entropy,pressure_drop_over_weight,bed_top\n"
-                                           + "".join(f"{a},{b},{c},{d}\n" for a, b, c, d in zip(t, entropy, drop, top)))
+    fastest = 12.0 + 4.0 * t
+    (folder / "timeseries.csv").write_text("time,mixing_entropy,pressure_drop_over_weight,bed_top,gas_max_speed\n"
+                                           + "".join(f"{a},{b},{c},{d},{e}\n"
+                                                     for a, b, c, d, e in zip(t, entropy, drop, top, fastest)))
     (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": [
         {"name": "ar1_2.9", "family": "ar1", "status": "stopped", "folder": str(folder), "t95": None,
          "point": {"gas.u_over_umf": 2.9}}]}))
@@ -224,10 +226,21 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     assert row["simulated_seconds"] == 3.0 and row["t95"] == pytest.approx(1.9, abs=0.02)
     assert row["pressure_drop_over_weight"] == pytest.approx(np.mean(drop[half]))
     assert row["pressure_drop_std_over_weight"] == pytest.approx(np.std(drop[half]))
-    # the bed's surface over the second half (the summary's packed-bed height of 0.2 m is not a
-    # fluidized bed's height)
-    assert row["bed_height"] == pytest.approx(np.mean(top[half]))
-    assert row["bed_expansion"] == pytest.approx(np.mean(top[half]) / 0.3)  # over the bed it started as
+    # the bed's surface over one window in every run, from 1 s after the inlet ramp (none here) for 3 s (the
+    # summary's packed-bed height of 0.2 m is not a fluidized bed's height)
+    window = (t >= 1.0) & (t <= 4.0)
+    assert row["bed_height"] == pytest.approx(np.mean(top[window]))
+    assert row["bed_expansion"] == pytest.approx(np.mean(top[window]) / 0.3)  # over the bed it started as
+    # the largest cell gas speed over the inlet velocity (2.9 x 1.58 m/s), over the same window: channels
+    assert row["gas_max_speed_over_inlet"] == pytest.approx(np.mean(fastest[window]) / (2.9 * 1.58))
+    # runs of different lengths (8 s; ended at 5.5 s, 2 s past t95) over one window: a bed rising slowly
+    # stands as high in both (over their second halves it would not: 6 s against 4.1 s)
+    from fvdem.study.mema2020 import _bed_surface
+    runs = [{"time": np.linspace(0.0, end, int(end * 100) + 1)} for end in (8.0, 5.5)]
+    for series in runs:
+        series["bed_top"] = 0.3 + 0.01 * series["time"]
+    assert _bed_surface(runs[0], 1.0) == pytest.approx(_bed_surface(runs[1], 1.0)) == pytest.approx(0.335)
+    assert _bed_surface(runs[0]) == pytest.approx(0.36) and _bed_surface(runs[1]) == pytest.approx(0.34125)
 
 
 def test_the_papers_findings_are_checked_from_the_t95_table():
@@ -747,6 +760,13 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert main(["study", str(out), "--archive", str(dest)]) == 0
     raised = {r["name"]: r for r in json.loads((dest / "table.json").read_text())}
     assert raised[runs[0]["name"]]["status"] == "pending" and raised[runs[0]["name"]]["duration"] == 8.0
+    # archived before the report kept a column (its time series without bed_top): archived again with it
+    archived = dest / "runs" / runs[1]["name"] / "timeseries.csv"
+    lines = [line.split(",") for line in archived.read_text().splitlines()]
+    drop = lines[0].index("bed_top")
+    archived.write_text("".join(",".join(x for k, x in enumerate(line) if k != drop) + "\n" for line in lines))
+    assert main(["study", str(out), "--archive", str(dest)]) == 0
+    assert "bed_top" in archived.read_text().splitlines()[0]
     assert raised[runs[1]["name"]]["status"] == "finished"
     index["runs"][0].pop("duration")
     (out / "study.json").write_text(json.dumps(index))

@@ -14,34 +14,55 @@ from .reports import StudyReport, register_report
 from .tasks import ENDED, FAILED, IN_PROGRESS
 
 
-def _bed_surface(series):
-    """The bed's height [m] as the table gives it: the mean over the second half of the time series of
-    ``bed_top`` (the height below which 99 % of the particle tops lie), None without it. The summary's
-    ``bed_height`` is a packed bed's (solid volume over area and core solids fraction): in a fluidized
-    bed it exceeds the column (1.37 m in the 1.05 m column for AR-1 at 2.9 Umf). ``series``: ``_series``'s
-    (None, or at least one row)."""
+# s: the window of the bed's height and of its channels, the same in every run whatever its length (8 s,
+# 20 s, or ended 2 s past t95: ``time.stop_after_mixed``): from this long after the inlet reached its velocity,
+# for ``WINDOW``
+WINDOW_START, WINDOW = 1.0, 3.0
+
+
+def _window_mean(series, column: str, ramp: float | None = None):
+    """The mean of a time-series column from ``WINDOW_START`` after the inlet ramp (``ramp`` [s]) for ``WINDOW``
+    (to the run's end if sooner); without a ramp known, or before the run reaches that window, over the second
+    half of its time series. One window for all runs: AR-1's first replicas' beds stood 1-5 % higher over their
+    second halves (4-8 s) than over 2.75-5.5 s, enough to decide AR-1 against AR-4 by run length. None without
+    the column. ``series``: ``_series``'s (None, or at least one row)."""
     import numpy as np
-    if series is None or "bed_top" not in series:
+    if series is None or column not in series:
         return None
     times = series["time"]
-    return float(np.mean(series["bed_top"][times >= 0.5 * times[-1]]))
+    start = None if ramp is None else ramp + WINDOW_START
+    if start is None or times[-1] <= start:
+        return float(np.mean(series[column][times >= 0.5 * times[-1]]))
+    return float(np.mean(series[column][(times >= start) & (times <= start + WINDOW)]))
 
 
-def _bed_expansion(series):
+def _bed_surface(series, ramp: float | None = None):
+    """The bed's height [m] as the table gives it: ``bed_top`` (the height below which 99 % of the particle tops
+    lie) over the window (``_window_mean``). The summary's ``bed_height`` is a packed bed's (solid volume over
+    area and core solids fraction): in a fluidized bed it exceeds the column (1.37 m in the 1.05 m column for
+    AR-1 at 2.9 Umf)."""
+    return _window_mean(series, "bed_top", ramp)
+
+
+def _bed_expansion(series, ramp: float | None = None):
     """The bed's expansion: its height (``_bed_surface``) over ``bed_top`` at the run's start (the settled bed
     it started from); None without it."""
-    surface = _bed_surface(series)
+    surface = _bed_surface(series, ramp)
     return None if surface is None or series["bed_top"][0] <= 0 else surface / float(series["bed_top"][0])
 
 
-def _inlet_passes_umf(folder: Path) -> float | None:
-    """When [s] a run's inlet velocity reaches the Umf its ``u_over_umf`` refers to: ``inlet_ramp / u_over_umf``
-    for a linear ramp from 0 (0 for a full-speed start); None without a readable case or a U/Umf."""
+def _gas(folder: Path):
+    """The gas settings of a run's case.toml; None without a readable one."""
     try:
-        gas = load_case(folder / "case.toml").gas
-    except CaseError:
+        return load_case(folder / "case.toml").gas
+    except (CaseError, OSError):
         return None
-    if not gas.u_over_umf:
+
+
+def _inlet_passes_umf(gas) -> float | None:
+    """When [s] a run's inlet velocity reaches the Umf its ``u_over_umf`` refers to: ``inlet_ramp / u_over_umf``
+    for a linear ramp from 0 (0 for a full-speed start); None without the case's gas settings or a U/Umf."""
+    if gas is None or not gas.u_over_umf:
         return None
     return gas.inlet_ramp / gas.u_over_umf if gas.u_over_umf >= 1.0 else None
 
@@ -284,7 +305,7 @@ def _gap_shrinks(rows, slow, fast, claim) -> dict:
 
 def _expansion(rows) -> dict:
     """AR-4 MP beds expand more than AR-1 beds at the same U/Umf (§5.1): the bed's expansion (its height,
-    ``bed_top`` over the second half of each run that reached its end, over its settled height at the start;
+    ``bed_top`` over the same window of each run that reached its end, over its settled height at the start;
     ``_bed_expansion``) larger at every velocity both ran."""
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf"
     ended = [r for r in rows if r["status"] in ENDED and r.get("bed_expansion") is not None]
@@ -298,8 +319,8 @@ def _expansion(rows) -> dict:
         values[f"{v:g}"] = {"ar4_mp": a[v], "ar1": b[v]}
         if abs(ma - mb) < CLOSE * max(ma, mb) and min(len(a[v]), len(b[v])) < 2:
             why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas")
-    rule = ("mean bed expansion (bed_top over the second half of the run over its settled value) of AR-4 MP above "
-            "AR-1's at every velocity both ran")
+    rule = (f"mean bed expansion (bed_top from {WINDOW_START:g} s after the inlet ramp for {WINDOW:g} s, over "
+            "its settled value) of AR-4 MP above AR-1's at every velocity both ran")
     if why:
         return {"finding": claim, "verdict": "open", "why": "; ".join(why) + " (too noisy to tell)", "values": values,
                 "rule": rule}
@@ -412,9 +433,14 @@ def _figures(out: Path, runs: list) -> list:
 
 def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     """t95 and t95 counted from when the inlet passes Umf, the bed's pressure drop over W/A and its
-    fluctuation, the bed height and expansion, the mixing entropy at the end and the void fractions' binarity."""
+    fluctuation, the bed height and expansion, the largest cell gas speed over the inlet velocity over the same
+    window (a channel's mark: 3.1-3.5 in AR-1's beds at 1.6-2.9 Umf, 5.5-5.8 in AR-4 MP's at 1.6, 8 there from
+    8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed), the mixing
+    entropy at the end and the void fractions' binarity."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
-    passes = _inlet_passes_umf(folder)
+    gas = _gas(folder)
+    passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
+    fastest = _window_mean(series, "gas_max_speed", ramp)
     t95 = r.get("t95")
     return {"t95": t95, "inlet_passes_umf": passes,
             "t95_from_inlet_at_umf": None if t95 is None or passes is None else t95 - passes,
@@ -422,7 +448,9 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
             "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
                                               if "bed_pressure_drop_std_second_half" in data
                                               else data.get("pressure_drop_std_over_weight")),
-            "bed_height": _bed_surface(series), "bed_expansion": _bed_expansion(series),
+            "bed_height": _bed_surface(series, ramp), "bed_expansion": _bed_expansion(series, ramp),
+            "gas_max_speed_over_inlet": (None if fastest is None or gas is None or not gas.inlet_velocity
+                                         else fastest / gas.inlet_velocity),
             "final_mixing_entropy": (float(series["mixing_entropy"][-1])
                                      if series is not None and "mixing_entropy" in series else None),
             "void_fraction_binarity": None if record is None else record["binarity"]}
@@ -443,7 +471,7 @@ register_report(StudyReport(
     run_values=lambda summary: {"t95": summary.get("t95")}, headline=_headline, live=_live, columns=_columns,
     figures=_figures, findings=check_findings,
     archived_columns=("mixing_entropy", "lacey_index", "pressure_drop_over_weight", "bed_pressure_drop", "bed_top",
-                      "rms_speed", "max_overlap_over_diameter"),
+                      "rms_speed", "max_overlap_over_diameter", "gas_max_speed"),
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",
                       "bed_height", "mixing_cells"),
     archive_extra=_archive_void_fractions))

@@ -159,7 +159,8 @@ def archive(out, dest) -> list:
             continue
         target = dest / "runs" / r["name"]
         held = _simulated_so_far(target, live=True) if target.exists() else -1.0
-        if float(series["time"][-1]) <= held:
+        columns = [c for c in ("time", *chosen.archived_columns) if c in series]
+        if float(series["time"][-1]) < held or float(series["time"][-1]) == held and not _lacks(target, columns):
             # what the archive holds is as far along (a later invocation lost nothing); the study's word on
             # the run (its status, its duration) is refreshed where the folder holds as much as the archive
             if float(series["time"][-1]) == held:
@@ -167,7 +168,6 @@ def archive(out, dest) -> list:
             _refresh_duration(runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}"}), r)
             continue
         target.mkdir(parents=True, exist_ok=True)
-        columns = [c for c in ("time", *chosen.archived_columns) if c in series]
         rows = zip(*(series[c] for c in columns))
         (target / "timeseries.csv").write_text(",".join(columns) + "\n" + "".join(
             ",".join(f"{v:.6g}" for v in row) + "\n" for row in rows))
@@ -190,6 +190,16 @@ def archive(out, dest) -> list:
     if (out / "study.toml").exists():
         (dest / "study.toml").write_text((out / "study.toml").read_text())
     return written + report(dest)
+
+
+def _lacks(target: Path, columns: list) -> bool:
+    """Whether an archived run's time series lacks one of ``columns`` (archived before its report kept it)."""
+    try:
+        with open(target / "timeseries.csv") as f:
+            header = f.readline().strip().split(",")
+    except OSError:
+        return True
+    return any(c not in header for c in columns)
 
 
 def _refresh_duration(entry: dict, current: dict) -> None:
