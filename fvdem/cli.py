@@ -58,6 +58,10 @@ def cmd_run(args) -> int:
         sim = Simulation(case, out, overwrite=args.overwrite, resume=args.resume,
                          progress=False if args.no_progress else None, threads=args.threads)
         running.append(sim)
+        busy = busy_cores(sim.threads)
+        if busy:
+            print(f"fvdem: warning: {busy}", file=sys.stderr)
+            sim.log.line(f"warning: {busy}")
         summary = sim.run()
     except _StoppedBeforeStart:
         print("stopped before the run started; nothing to resume from beyond the folder's last checkpoint "
@@ -253,6 +257,22 @@ def cores() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux
         return os.cpu_count() or 1
+
+
+def busy_cores(threads: int) -> str | None:
+    """Why ``threads`` numba threads are too many for the cores other work leaves free (the 1-minute load
+    average against ``cores()``), else None. A step's parallel loops each end with every thread waiting for
+    the others, so a thread that waits for a core stalls the whole step: the demo bed beside two busy cores
+    ran 3 x slower on 2 threads than on 1 (docs/benchmarks.md, "More numba threads than free cores")."""
+    try:
+        load = os.getloadavg()[0]
+    except (OSError, AttributeError):  # pragma: no cover - no load average on this system
+        return None
+    free = cores() - load
+    if threads <= 1 or threads <= free + 0.5:
+        return None
+    return (f"the machine is busy (load average {load:.1f} on {cores()} cores): {threads} numba threads wait for "
+            f"each other at every step when a core is taken; run with --threads {max(1, round(free))}")
 
 
 def thread_count(text: str) -> int:

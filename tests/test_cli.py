@@ -36,6 +36,22 @@ def test_a_thread_count_outside_the_machine_is_refused_with_the_range(value, tmp
     assert study.returncode == 2 and "at least 1" in study.stderr and not (tmp_path / "s").exists()
 
 
+def test_more_threads_than_the_cores_other_work_leaves_free_are_warned_with_the_count_to_use(monkeypatch):
+    """`fvdem run` warns when its numba threads exceed the free cores (the 1-minute load average against the
+    CPUs it may use): each parallel loop's threads wait for each other, 3 x slower than one thread."""
+    from fvdem import cli
+    monkeypatch.setattr(cli, "cores", lambda: 4)
+    load = {"now": 3.0}
+    monkeypatch.setattr(cli.os, "getloadavg", lambda: (load["now"], 0.0, 0.0))
+    message = cli.busy_cores(2)
+    assert "load average 3.0 on 4 cores" in message and message.endswith("--threads 1")
+    assert cli.busy_cores(1) is None  # one thread waits for no other
+    load["now"] = 2.0
+    assert cli.busy_cores(4).endswith("--threads 2") and cli.busy_cores(2) is None
+    load["now"] = 0.3
+    assert cli.busy_cores(4) is None  # an idle machine
+
+
 def test_version_names_the_release_and_the_commit():
     from fvdem import __version__
     result = fvdem("--version")
