@@ -179,13 +179,19 @@ def test_the_papers_study_and_its_subset_are_the_runs_the_issue_names(tmp_path):
     assert all(r.overrides["gas.inlet_ramp"] == 1.0 for r in full.runs + subset.runs)
 
 
-def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path):
+def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypatch):
     """Figs. 3 / 7 (AR-1 against AR-4 MP) and 9 (AR-4 MP drag only against full) at the velocities both
-    families ran; a family without its partner draws no pair."""
+    families ran, with every replica of each; a family without its partner draws no pair."""
+    import fvdem.analysis.plots as plots
     from fvdem.study import report
+    drawn, plot_mixing = {}, plots.plot_mixing
+    monkeypatch.setattr(plots, "plot_mixing", lambda folders, path: drawn.setdefault(
+        Path(path).name, [Path(f).name for f in folders]) and plot_mixing(folders, path))
     runs = []
-    for family, ratio in (("ar1", 2.0), ("ar4_mp", 2.0), ("ar4_mp", 2.9), ("ar4_mp_drag", 2.9), ("ar1", 1.6)):
+    for family, ratio in (("ar1", 2.0), ("ar4_mp", 2.0), ("ar4_mp", 2.9), ("ar4_mp_drag", 2.9), ("ar1", 1.6),
+                          ("ar1_r2", 2.0)):
         folder = tmp_path / "runs" / f"{family}_{ratio}"
+        family = family.removesuffix("_r2")
         folder.mkdir(parents=True)
         (folder / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.5,0.6\n1.0,0.97\n")
         (folder / "case.toml").write_text(f'name = "{family}"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = {ratio}\n')
@@ -196,6 +202,7 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path):
     assert "fig3_mixing_2.png" in names and "fig7_void_fraction_2.png" in names and "fig9_mixing_2.9.png" in names
     assert not any(n.startswith(("fig3_mixing_1.6", "fig3_mixing_2.9", "fig9_mixing_2.png")) for n in names)
     assert {"mixing_ar1.png", "mixing_ar4_mp.png", "t95.png", "table.csv", "table.json"} <= set(names)
+    assert drawn["fig3_mixing_2.png"] == ["ar1_2.0", "ar1_r2_2.0", "ar4_mp_2.0"]  # both AR-1 replicas
 
 
 def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_stops_summary(tmp_path):

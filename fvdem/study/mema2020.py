@@ -68,11 +68,12 @@ def _inlet_passes_umf(gas) -> float | None:
 
 
 def _pairs(runs, first, second) -> dict:
-    """``{axes values: (run of family first, run of family second)}`` where both ran at those values."""
+    """``{axes values: (runs of family first, then of family second)}`` where both ran at those values, every
+    replica of each (the figures draw the spread, not one replica)."""
     by = {}
     for r in runs:
-        by.setdefault(tuple(r.get("point", {}).values()), {})[r["family"]] = r
-    return {point: (fam[first], fam[second]) for point, fam in by.items() if first in fam and second in fam}
+        by.setdefault(tuple(r.get("point", {}).values()), {}).setdefault(r["family"], []).append(r)
+    return {point: (*fam[first], *fam[second]) for point, fam in by.items() if first in fam and second in fam}
 
 
 def void_fraction_samples(folder, below=0.3):
