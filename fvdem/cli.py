@@ -77,9 +77,9 @@ def cmd_run(args) -> int:
         return 130
     from .timing import format_table
     print(format_table(summary["timings"], summary["threads"], summary["steps"], summary["simulated_time"]))
-    keys = ("simulated_time", "ended", "steps", "wall_seconds", "bed_height", "solids_fraction", "contacts_per_particle",
-            "max_overlap_over_diameter", "t95", "pressure_drop_over_weight", "porous_zone_pressure_gradient",
-            "expected_pressure_gradient")
+    keys = ("simulated_time", "ended", "steps", "wall_seconds", "bed_height", "solids_fraction",
+            "contacts_per_particle", "max_overlap_over_diameter", "t95", "pressure_drop_over_weight",
+            "porous_zone_pressure_gradient", "expected_pressure_gradient")
     print(json.dumps({k: round(summary[k], 12) if isinstance(summary[k], float) else summary[k]
                       for k in keys if k in summary and (k != "ended" or summary[k])}))  # ended early: why
     views = " and ".join(name for name in ("particles.pvd", "gas.pvd") if (out / name).exists())
