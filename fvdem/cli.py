@@ -167,6 +167,10 @@ def cmd_study(args) -> int:
         from .study import load_cluster
         study = replace(study, cluster=load_cluster(args.cluster))
     log = (lambda line: print(line, file=sys.stderr, flush=True))
+    if args.restore:
+        code = _restore(study, args.restore, log)
+        if code:
+            return code
     durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
     log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {durations} s into {args.out}")
     result = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers,
@@ -184,6 +188,26 @@ def cmd_study(args) -> int:
             "continues the study")
     print(json.dumps(result) if args.json else json.dumps(result, indent=1))
     return 130 if result.get("stopped") else (1 if failed else 0)
+
+
+def _restore(study, source, log) -> int:
+    """``fvdem study --restore``: the archive's finished runs into the study's run folders, one line each."""
+    from .study import restore
+    if not Path(source, "study.json").exists():
+        return _fail(f"--restore {source}: not an archive of a study (no study.json; fvdem study DIR --archive "
+                     f"{source} writes one)")
+    try:
+        outcomes = restore(study, source)
+    except ValueError as exc:
+        return _fail(str(exc))
+    counts = {}
+    for name, outcome in outcomes:
+        counts[outcome.split(":")[0]] = counts.get(outcome.split(":")[0], 0) + 1
+        if outcome not in ("restored", "exists"):
+            log(f"restore: {name}: {outcome}" + (" (starts again: an archive has no checkpoint)"
+                                                 if outcome == "in progress" else ""))
+    log(f"restore from {source}: " + (", ".join(f"{n} {k}" for k, n in counts.items()) or "no archived runs"))
+    return 0
 
 
 def cmd_info(args) -> int:
@@ -362,6 +386,10 @@ def make_parser() -> argparse.ArgumentParser:
     study.add_argument("--results", metavar="FILE",
                        help="write a study folder's (or an archive's) results as one JSON file: its table rows, "
                             "its findings and what made them (code, machine, how many runs ended); the report first")
+    study.add_argument("--restore", metavar="ARCHIVE",
+                       help="first copy into --out the runs an archive of this study (--archive) holds at their "
+                            "end, so that they are skipped (a study folder lost with its machine); never over a "
+                            "run folder that exists; runs the archive holds in progress start again")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
     study.add_argument("--stop", action="store_true",
                        help="ask the study running in this folder to stop (its runs checkpoint first)")

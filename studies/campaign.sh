@@ -1,19 +1,21 @@
 #!/usr/bin/env bash
-# The paper's study campaign (issue 30), resumable: stage 1 (studies/mema2020_stage1.toml, why fvdem mixes
-# slowly at 2 Umf), then stage 2 (studies/mema2020_stage2.toml, the paper's 22 runs, two replicas). Start it
+# The paper's study campaign (issue 30), resumable: stage 2 (studies/mema2020_stage2.toml, the paper's 22
+# runs, two replicas), after stage 1 (studies/mema2020_stage1.toml, why fvdem mixes slowly at 2 Umf). Start it
 # in the background first thing in a session, from a clone of its own (a work tree being edited would
 # change the code under a running campaign: the workers import it afresh whenever they restart):
 #   git clone <repo> ~/fvdem-code && cd ~/fvdem-code        # once; later: git -C ~/fvdem-code pull
 #   setsid nohup studies/campaign.sh > ~/fvdem-runs/campaign.log 2>&1 < /dev/null &
 # and before the session ends archive what finished into the repository (from the work tree):
-#   .venv/bin/fvdem study ~/fvdem-runs/mema2020_stage1 --archive docs/data/mema2020_stage1
 #   .venv/bin/fvdem study ~/fvdem-runs/mema2020_stage2 --archive docs/data/mema2020
 # Study folders live outside the work tree (~/fvdem-runs), so a new work tree loses nothing; finished
 # runs are skipped, interrupted ones resume bit-for-bit from their checkpoints (a run resumed by newer code
-# says so in its run.log). Two runs at a time, one numba thread each (more threads than free cores stall
-# OpenMP: docs/benchmarks.md). Stage 1's last run (AR-4 MP at 2 x the experiment's Umf) runs beside stage 2 on
-# one worker (three single-threaded runs on two cores while it lasts); stage 2 reuses stage 1's settled beds
-# where they are the same (ar1, ar1_r2, ar4: copied once, 2026-12-03).
+# says so in its run.log), and runs in progress go before runs not started. A machine handed back bare (the
+# eighteenth session, 2026-12-03: ~/fvdem-runs was gone) loses only the runs in progress: the study starts
+# with --restore from its archive, which copies the runs the archive holds at their end into the study
+# folder (never over a run folder there), so that they are skipped and no bed settles again for them.
+# Two runs at a time, one numba thread each (more threads than free cores stall OpenMP: docs/benchmarks.md).
+# Stage 1 (studies/mema2020_stage1.toml) has ended; docs/data/mema2020_stage1 holds all its runs (its
+# folder comes back with: fvdem study studies/mema2020_stage1.toml --out DIR --restore docs/data/mema2020_stage1).
 # Timing anything else while it runs: pause the whole campaign (kill -STOP -- -<its process group>, then
 # -CONT). Dask's scheduler restarts a worker that has not sent a heartbeat for its worker-ttl (default 5 min),
 # killing its run back to the last checkpoint; that happened once after a series of pauses (2026-12-03), so
@@ -23,9 +25,5 @@ cd "$(dirname "$0")/.."
 export DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL="${DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL:-1 hour}"
 [ -x .venv/bin/fvdem ] || make venv
 OUT=${FVDEM_RUNS:-$HOME/fvdem-runs}
-.venv/bin/fvdem study studies/mema2020_stage1.toml --out "$OUT/mema2020_stage1" --workers 1 &
-stage1=$!
-.venv/bin/fvdem study studies/mema2020_stage2.toml --out "$OUT/mema2020_stage2" --workers 2
-status=$?
-wait $stage1
-exit $status
+.venv/bin/fvdem study studies/mema2020_stage2.toml --out "$OUT/mema2020_stage2" --workers 2 \
+    --restore docs/data/mema2020

@@ -1053,3 +1053,88 @@ def test_the_generic_report_writes_the_table_alone(tmp_path):
                                     "simulated_seconds", "duration", "replica"}
         else:
             assert {"findings.json", "t95.png"} <= written and "t95" in rows[0] and "void_fraction_binarity" in rows[0]
+
+
+@pytest.mark.slow
+def test_a_study_lost_with_its_machine_continues_from_its_archive(tmp_path, capsys):
+    """fvdem study STUDY --out NEW --restore ARCHIVE: the runs the archive holds at their end are copied into
+    NEW and skipped, with no bed settled for them; a run the archive holds in progress starts again (an
+    archive has no checkpoint) from a bed settled again, and ends bit-for-bit as it did on the lost machine;
+    a run folder that exists is never replaced; a run whose case changed since is not restored; an archive of
+    another study, or a folder that is no archive, is refused (exit 2) before anything runs."""
+    from fvdem.cli import main
+    from fvdem.study import archive, restore, run_study
+    path = tmp_path / "smoke.toml"
+    path.write_text(SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/'))
+    lost, dest = tmp_path / "lost", tmp_path / "archive"
+    run_study(load_study(path, lost), lost, workers=1, log=lambda line: None)
+    archive(lost, dest)
+    first, second = (r.name for r in load_study(path, lost).runs)
+
+    def study(out, *args):
+        capsys.readouterr()
+        code = main(["study", str(path), "--out", str(out), "--workers", "1", "--json", *args])
+        captured = capsys.readouterr()
+        return code, (json.loads(captured.out) if code == 0 else None), captured.err
+
+    code, result, err = study(tmp_path / "new", "--restore", str(dest))
+    assert code == 0 and [r["status"] for r in result["runs"]] == ["skipped", "skipped"]
+    assert "restore from" in err and "2 restored" in err
+    assert not (tmp_path / "new" / "beds").exists()  # no run needed its bed
+    assert "restored from the archive" in (tmp_path / "new" / "runs" / first / "run.log").read_text()
+    # the archive holds the second run in progress (the machine was lost while it ran)
+    summary = dest / "runs" / second / "summary.json"
+    summary.write_text(json.dumps({**json.loads(summary.read_text()), "simulated_time": 0.01, "stopped_early": True}))
+    code, result, err = study(tmp_path / "again", "--restore", str(dest))
+    assert code == 0 and [r["status"] for r in result["runs"]] == ["skipped", "finished"]
+    assert f"restore: {second}: in progress (starts again" in err and "1 restored, 1 in progress" in err
+    assert (tmp_path / "again" / "beds" / "small" / "final_state.npz").exists()
+    assert ((tmp_path / "again" / "runs" / second / "timeseries.csv").read_text()
+            == (lost / "runs" / second / "timeseries.csv").read_text())
+    # never over a run folder that exists; not where the case changed since it ran
+    assert restore(load_study(path, tmp_path / "again"), dest) == [(first, "exists"), (second, "in progress")]
+    changed = tmp_path / "changed.toml"
+    changed.write_text(path.read_text().replace('"particles.count" = 150\n"gas.inlet_ramp"',
+                                                '"particles.count" = 150\n"contact.friction" = 0.2\n"gas.inlet_ramp"'))
+    outcomes = dict(restore(load_study(changed, tmp_path / "changed"), dest))
+    assert outcomes[first].startswith("case differs: contact.friction: ")
+    assert not (tmp_path / "changed" / "runs" / first).exists()
+    # refused: an archive of another study; no archive at all
+    index = json.loads((dest / "study.json").read_text())
+    (dest / "study.json").write_text(json.dumps({**index, "study": "another"}))
+    for source, said in ((dest, "an archive of study 'another', not 'smoke'"),
+                         (tmp_path / "lost" / "runs", "no study.json")):
+        code, _, err = study(tmp_path / "refused", "--restore", str(source))
+        assert code == 2 and said in err and "Traceback" not in err
+        assert not (tmp_path / "refused" / "runs").exists()
+
+
+def test_runs_in_progress_go_before_every_run_not_started(tmp_path):
+    """A campaign stopped every session finishes what it began: a run with simulated time in its folder (not at
+    its end) outranks every run not started, whatever its replica, and the nearest its end goes first; the
+    beds still come first."""
+    from fvdem.study.runner import BED_RANK
+    study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
+    by_name = {r.name: r for r in study.runs}
+    fresh = max(_priority(r) for r in study.runs)
+    for name, so_far in (("ar1_u_over_umf2_r2", 1.0), ("ar4_mp_u_over_umf1.6_r2", 15.0)):
+        folder = Path(by_name[name].folder)
+        folder.mkdir(parents=True)
+        (folder / "summary.json").write_text(json.dumps({"simulated_time": so_far, "stopped_early": True}))
+    near, far = _priority(by_name["ar4_mp_u_over_umf1.6_r2"]), _priority(by_name["ar1_u_over_umf2_r2"])
+    assert BED_RANK > near > far > fresh  # 5 s left before 7 s left, both before any first replica not started
+    # a run at its end is not in progress
+    (Path(by_name["ar1_u_over_umf2_r2"].folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
+    assert _priority(by_name["ar1_u_over_umf2_r2"]) < fresh
+
+
+def test_the_eta_counts_only_what_this_invocation_simulated():
+    """A study resumed or restored with 60 of its 464 simulated seconds in its folders: the time left comes from
+    what it simulated since it started (10 s in 100 s of wall time), not from the runs it skipped."""
+    import time
+
+    from fvdem.study import progress_line
+    started = time.perf_counter() - 100.0
+    line = progress_line(9, 44, "r", "finished", "", started, 70.0, 464.0, " simulated s", work_start=60.0)
+    assert float(line.rsplit("ETA ", 1)[1].split()[0]) == pytest.approx(394.0 / 0.1, rel=0.01)
+    assert progress_line(8, 44, "r", "skipped", "", started, 60.0, 464.0, work_start=60.0).endswith("ETA ?")

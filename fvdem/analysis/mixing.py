@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+MIXED = 0.95  # the entropy at which a bed counts as mixed: t95, the first time S_tot reaches it (Mema et al., §4)
+
 
 def _cell_counts(position, colour, lower, upper, cells):
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
@@ -57,7 +59,7 @@ def lacey_index(position, colour, lower, upper, cells=(5, 5, 35)) -> float:
     return mixing_indices(position, colour, lower, upper, cells)[1]
 
 
-def mixing_time(times, entropy, level: float = 0.95):
+def mixing_time(times, entropy, level: float = MIXED):
     """First time [s] at which ``entropy`` reaches ``level`` (linear interpolation between samples),
     or None if it never does."""
     times, entropy = np.asarray(times, float), np.asarray(entropy, float)

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .mixing import MIXED
+
 
 def _pyplot():
     import matplotlib
@@ -134,7 +136,7 @@ def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path
     return _save(fig, Path(out) / "colours.png")
 
 
-def plot_mixing(runs, path, level=0.95) -> Path:
+def plot_mixing(runs, path, level=MIXED) -> Path:
     """Mixing entropy against time for one or more run folders on one chart (Mema et al. (2020) Figs. 2-3),
     the t95 of each marked."""
     from .mixing import mixing_time
@@ -158,7 +160,7 @@ def plot_mixing(runs, path, level=0.95) -> Path:
     return _save(fig, Path(path))
 
 
-def mixing_times(runs, level=0.95, names=None) -> dict:
+def mixing_times(runs, level=MIXED, names=None) -> dict:
     """``{name: [(U/Umf, t95 or None, simulated end), ...]}`` of run folders (their case.toml and
     timeseries.csv), sorted by U/Umf (runs at the same U/Umf, such as replicas, by t95, unmixed last):
     the data of Mema et al.'s Fig. 4. ``names``: the group of each run (a study's families); by default
@@ -178,7 +180,7 @@ def mixing_times(runs, level=0.95, names=None) -> dict:
             for name, rows in groups.items()}
 
 
-def plot_t95(runs, path, level=0.95, names=None) -> Path:
+def plot_t95(runs, path, level=MIXED, names=None) -> Path:
     """Mixing time t95 against U/Umf, one line per case name (or per ``names``, the group of each
     run; Mema et al. (2020) Fig. 4). A run that has not reached the level is drawn as an open triangle at its
     end time: t95 is later than that."""

@@ -84,23 +84,29 @@ def prepare_output(out_dir, overwrite: bool = False, resume: bool = False) -> Pa
 def check_resumable(case: Case, out: Path) -> None:
     """Refuse to resume ``out`` with a case whose physics differs from the one it was started with
     (its ``case.toml``), naming every key that differs; end time, output and run settings may change."""
+    changed = physics_changes(case, out)
+    if changed:
+        raise OutputError(f"--resume: the case differs from the one {out} was started with in {changed}. A resumed "
+                          "run continues the same physics; change only time.end, output.*, run.*, "
+                          "gas.pressure_preconditioner or gas.corrector_tolerance, or start a new run folder")
+
+
+def physics_changes(case: Case, out: Path, also_safe=()) -> str:
+    """The keys (with their values before and now) in which ``case`` differs from the ``case.toml`` of run folder
+    ``out`` beyond ``RESUME_SAFE`` and ``also_safe``; "" where they agree or ``out`` has no case.toml."""
     import tomllib
-    path = out / "case.toml"
+    path = Path(out) / "case.toml"
     if not path.exists():
-        return
+        return ""
     try:
         before = _flatten(tomllib.loads(path.read_text()))
     except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise OutputError(f"--resume: {path} cannot be read ({exc}); it records the case the run was started with")
+        raise OutputError(f"{path} cannot be read ({exc}); it records the case the run was started with")
     now = _flatten(tomllib.loads(to_toml(case)))
     changed = [key for key in sorted(set(before) | set(now))
                if before.get(key) != now.get(key) and not any(
-                   key == safe or (safe.endswith(".") and key.startswith(safe)) for safe in RESUME_SAFE)]
-    if changed:
-        listed = "; ".join(f"{k}: {before.get(k, '(unset)')!r} -> {now.get(k, '(unset)')!r}" for k in changed)
-        raise OutputError(f"--resume: the case differs from the one {out} was started with in {listed}. A resumed run "
-                          "continues the same physics; change only time.end, output.*, run.*, "
-                          "gas.pressure_preconditioner or gas.corrector_tolerance, or start a new run folder")
+                   key == safe or (safe.endswith(".") and key.startswith(safe)) for safe in (*RESUME_SAFE, *also_safe))]
+    return "; ".join(f"{k}: {before.get(k, '(unset)')!r} -> {now.get(k, '(unset)')!r}" for k in changed)
 
 
 def _flatten(table, prefix=""):

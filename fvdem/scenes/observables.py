@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..analysis.bed import bed_top, bed_weight_per_area, packed_bed_summary
-from ..analysis.mixing import mixing_indices, mixing_time
+from ..analysis.mixing import MIXED, mixing_indices, mixing_time
 from .base import Observable
 
 
@@ -125,7 +125,7 @@ class Mixing(Observable):
         margin = model.case.time.stop_after_mixed
         if margin is None or not history:
             return ""
-        if self._t95 is None and (history[-1][1] >= 0.95 or not self._scanned):  # found once, then kept
+        if self._t95 is None and (history[-1][1] >= MIXED or not self._scanned):  # found once, then kept
             rows = np.asarray(history, float)  # (the whole history once: a resumed run may have mixed before)
             self._t95, self._scanned = mixing_time(rows[:, 0], rows[:, 1]), True
         return "mixed" if past_mixing(self._t95, margin, model.time) else ""

@@ -31,8 +31,10 @@ default, the ``--scheduler`` of a running cluster, or a dask-jobqueue cluster fr
 run's folder is ``OUT/runs/<name>``, a bed's ``OUT/beds/<name>``. A finished run (its summary
 reached the duration) is skipped, an interrupted one resumed from its checkpoint (also when Dask
 retries a task whose worker died), and a failed one reported with its cause without stopping the
-others. Every case is checked before anything runs. Runs start longest first (most DEM steps
-left), so the last to finish is not a long one begun late.
+others. Every case is checked before anything runs. Runs in progress go first (the nearest its end
+first), then first replicas before second ones, longest first (most DEM steps left), so the last to
+finish is not a long one begun late. A bed settles only for runs not at their end. A study folder lost
+with its machine comes back from its archive (``--restore``: the runs it holds at their end are skipped).
 
 Stopping: Ctrl-C or SIGTERM to ``fvdem study``, or ``fvdem study OUT --stop`` from anywhere, writes
 ``OUT/STOP``; each running run then checkpoints at its next chunk and returns ``stopped``, runs not
@@ -50,7 +52,7 @@ from .checks import read_toml
 from .cluster import (CLUSTER_KINDS, CLUSTER_TYPES, DEFAULT_STOP_BEFORE_WALLTIME, JOB_END_ENV, STOP_MARGIN_ENV,
                       check_cluster, close_client, cluster_keys, job_deadline, jobqueue_options, load_cluster,
                       make_client, walltime_seconds)
-from .reports import REPORTS, StudyReport, archive, register_report, report, report_for, results
+from .reports import REPORTS, StudyReport, archive, register_report, report, report_for, restore, results
 from .runner import map_tasks, progress_line, request_stop, run_study, task_tag, write_index
 from .sweep import STUDY_KEYS, BedSpec, RunSpec, Study, load_study, select_runs, study_from_table
 from .tasks import STOP_FILE, StudyStopped, prepare_bed, run_task
@@ -60,7 +62,7 @@ __all__ = ["CLUSTER_KINDS", "CLUSTER_TYPES", "DEFAULT_STOP_BEFORE_WALLTIME", "JO
            "STOP_MARGIN_ENV", "STUDY_KEYS", "BedSpec", "RunSpec", "Study", "StudyReport", "StudyStopped", "archive",
            "check_cluster", "check_findings", "close_client", "cluster_keys", "job_deadline", "jobqueue_options",
            "load_cluster", "load_study", "make_client", "map_tasks", "prepare_bed", "progress_line", "read_toml",
-           "register_report", "report", "report_for", "request_stop", "results", "run_study", "run_task",
+           "register_report", "report", "report_for", "request_stop", "restore", "results", "run_study", "run_task",
            "select_runs",
            "study_from_table", "task_tag", "void_fraction_record", "void_fraction_samples", "walltime_seconds",
            "write_index"]

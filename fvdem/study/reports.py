@@ -208,6 +208,60 @@ def _refresh_duration(entry: dict, current: dict) -> None:
         entry["duration"] = current["duration"]
 
 
+def restore(study, source) -> list:
+    """``archive``'s way back, for a study folder lost with its machine: each run that the archive ``source``
+    holds at its end under the study's current case is copied into its run folder (its compact results:
+    summary, time series, case, log, the report's extra files), so that the study skips it and settles no bed
+    for it. Never over a run folder that exists. An archived run still in progress starts again (an archive
+    has no checkpoint); the archive keeps its results until the new run passes them. Returns one
+    ``(run, outcome)`` per archived run: "restored", "exists", "in progress" or "case differs: <keys>"."""
+    import shutil
+
+    from ..case import load_case
+    from ..io.run_folder import physics_changes
+    from ..provenance import describe, provenance
+    from .tasks import _finished
+    source = Path(source)
+    index = json.loads((source / "study.json").read_text())
+    if index.get("study") != study.name:
+        raise ValueError(f"--restore {source}: an archive of study {index.get('study')!r}, not {study.name!r}")
+    outcomes = []
+    for run in study.runs:
+        held = source / "runs" / run.name
+        if not (held / "summary.json").exists():
+            continue
+        case = load_case(run.case, {**run.overrides, "output.progress": False})
+        bed = _bed_of(held)
+        changed = physics_changes(case, held, also_safe=("particles.initial_state",))
+        if run.bed and bed != run.bed:  # its bed, not only its settings: the replica's own bed
+            changed = "; ".join(x for x in (changed, f"its bed: {bed!r} -> {run.bed!r}") if x)
+        folder = Path(run.folder)
+        if changed:
+            outcomes.append((run.name, f"case differs: {changed}"))
+        elif not _finished(held, case):
+            outcomes.append((run.name, "in progress"))
+        elif folder.exists() and any(folder.iterdir()):
+            outcomes.append((run.name, "exists"))
+        else:
+            folder.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copytree(held, folder, dirs_exist_ok=True)
+            with open(folder / "run.log", "a") as log:
+                log.write(f"restored from the archive {source.resolve()} (compact results: no checkpoint, "
+                          f"state or snapshots; the run had ended) by {describe(provenance())}\n")
+            outcomes.append((run.name, "restored"))
+    return outcomes
+
+
+def _bed_of(folder: Path) -> str | None:
+    """The bed a run folder's run started from: the folder of its ``particles.initial_state`` (``beds/<bed>/``)."""
+    import tomllib
+    try:
+        state = tomllib.loads((folder / "case.toml").read_text()).get("particles", {}).get("initial_state")
+    except (OSError, tomllib.TOMLDecodeError):
+        return None
+    return Path(state).parent.name if state else None
+
+
 # --------------------------------------------------------------------------- the results as one file
 
 

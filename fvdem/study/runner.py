@@ -1,5 +1,5 @@
-"""The Dask runner: a study's beds and runs as tasks (first replicas first, longest first), their
-progress, stop requests, walltime pauses and resubmissions, and ``study.json``; ``map_tasks`` for the
+"""The Dask runner: a study's beds and runs as tasks (runs in progress first, then first replicas, longest
+first), their progress, stop requests, walltime pauses and resubmissions, and ``study.json``; ``map_tasks`` for the
 sweeps that are not studies of case files. Nothing here knows what a run measures: the study's report
 (``reports``) gives each finished run's progress detail."""
 from __future__ import annotations
@@ -15,22 +15,25 @@ from ..case import CaseError, load_case
 from .cluster import close_client, make_client
 from .reports import report_for
 from .sweep import BedSpec, RunSpec, Study
-from .tasks import FAILED, STOP_FILE, StudyStopped, _ended_early, _simulated_so_far, prepare_bed, run_task
+from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, prepare_bed,
+                    run_finished, run_task)
 
 
 MAX_STALLS = 3  # paused attempts in a row that started and made no progress: the walltime is too short
 
 
 def progress_line(done: int, total: int, name: str, status: str, detail: str, started: float,
-                  work_done: float | None = None, work_total: float | None = None, unit: str = "") -> str:
+                  work_done: float | None = None, work_total: float | None = None, unit: str = "",
+                  work_start: float = 0.0) -> str:
     """One line of a sweep's progress view: tasks done, the work done (e.g. simulated seconds) and an ETA
-    from the rate so far."""
+    from the rate so far (the work done since ``started``: beyond ``work_start``, what was done before)."""
     elapsed = time.perf_counter() - started
     done_work, total_work = (done, total) if work_done is None else (work_done, work_total)
-    eta = elapsed / done_work * (total_work - done_work) if done_work else math.nan
+    rate = (done_work - work_start) / elapsed if elapsed > 0 and done_work > work_start else 0.0
+    eta = (total_work - done_work) / rate if rate else math.nan
     work = f"{done_work:.4g} of {total_work:.4g}{unit} done, " if work_done is not None else ""
     return (f"[{done}/{total}] {name}: {status}" + (f" ({detail})" if detail else "")
-            + f"; {work}{elapsed:.0f} s wall, ETA {eta:.0f} s")
+            + f"; {work}{elapsed:.0f} s wall, ETA " + (f"{eta:.0f} s" if eta == eta else "?"))
 
 
 def _guarded(function, item, threads):
@@ -86,18 +89,27 @@ REPLICA_RANK = 10**10
 
 BED_RANK = 10**12
 
+# a run in progress (a checkpoint, not at its end) before every run not started, the nearest its end first:
+# a campaign stopped every session finishes what it began instead of beginning more (a machine handed back
+# bare loses the runs in progress, compact results of finished ones are archived)
+IN_PROGRESS_RANK = 10**11
+
 
 def _priority(run: RunSpec) -> int:
-    """First replicas first, then longest first: DEM steps left (duration minus what the folder holds,
-    over the DEM step), less ``REPLICA_RANK`` per replica after the first. A campaign cut short has every
-    point of the study once before it has any twice."""
+    """Runs in progress first (``IN_PROGRESS_RANK``), the nearest their end first; then first replicas
+    first, longest first: DEM steps left (duration minus what the folder holds, over the DEM step), less
+    ``REPLICA_RANK`` per replica after the first. A campaign cut short has every point of the study once
+    before it has any twice."""
     rank = -(run.replica - 1) * REPLICA_RANK
     try:
-        dem_step = float(load_case(run.case, dict(run.overrides)).time.dem_step)
+        case = load_case(run.case, {**run.overrides, "output.progress": False})
     except CaseError:
         return rank
-    left = max(0.0, run.duration - _simulated_so_far(Path(run.folder)))
-    return rank + int(round(left / dem_step))
+    so_far = _simulated_so_far(Path(run.folder))
+    steps_left = int(round(max(0.0, run.duration - so_far) / float(case.time.dem_step)))
+    if so_far > 0 and not _finished(Path(run.folder), case):
+        return IN_PROGRESS_RANK - steps_left
+    return rank + steps_left
 
 
 def _bed_priority(bed: BedSpec) -> int:
@@ -116,7 +128,8 @@ class _StudyProgress:
         from ..io.progress import progress_bar
         self.study, self.log = study, log
         self.total = sum(r.duration for r in study.runs)
-        self.bar = progress_bar(self.total, self._simulated(), f"study {study.name} (simulated s)")
+        self.initial = self._simulated()  # what the run folders held when the study started
+        self.bar = progress_bar(self.total, self.initial, f"study {study.name} (simulated s)")
         if hasattr(self.bar, "step"):
             self.bar.step = 2.0
             self.bar.final_postfix = True  # the last line says how many runs ended, even after the 100 % line
@@ -191,8 +204,11 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
     tag = task_tag(study, out)
     chosen = report_for(study.report)
     try:
+        # a bed settles only for runs not at their end (a study restored from its archive settles none
+        # for the runs it holds finished: a run at its end is skipped without its bed's state)
+        needed = {r.bed for r in study.runs if r.bed and not run_finished(r)}
         beds = {b.name: client.submit(prepare_bed, b, threads, key=f"{tag}bed-{b.name}", pure=False,
-                                      priority=_bed_priority(b)) for b in study.beds}
+                                      priority=_bed_priority(b)) for b in study.beds if b.name in needed}
 
         def submit(run, key):
             return client.submit(run_task, run, threads, beds.get(run.bed) if run.bed else None, key=key, pure=False,
@@ -219,7 +235,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                 # or the scheduler could hand the run straight back to it), and adaptive scaling starts a
                 # fresh job. Dask retires a worker only when no key lives on it alone, so the paused run's
                 # result and its bed's state (now passed by value) are released first.
-                if run.bed and not isinstance(beds[run.bed], str):
+                if run.bed in beds and not isinstance(beds[run.bed], str):
                     beds[run.bed] = beds[run.bed].result()
                 client.cancel([future])
                 _retire(client, result["worker"])
@@ -233,7 +249,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             return retry
 
         total = sum(r.duration for r in study.runs)
-        results, done = [], 0.0
+        results = []
         write_index(out, study, description=description)
         bar = _StudyProgress(study, started, log)
         while pending:
@@ -262,11 +278,10 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                         "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
                         "it; raise the cluster's walltime or lower stop_before_walltime")}
                 results.append(result)
-                if result["status"] != FAILED:  # a run that ended early (mixed) did its whole share
-                    done += run_of[future.key].duration if result.get("ended") else result.get("simulated_seconds", 0.0)
                 detail = result.get("error") or (chosen.headline(result) if chosen.headline else "")
+                bar.update(len(results))  # the ETA from what this invocation simulated (not runs skipped, restored)
                 bar.message(progress_line(len(results), len(study.runs), result["name"], result["status"], detail,
-                                          started, done, total, " simulated s"))
+                                          started, bar.bar.n, total, " simulated s", work_start=bar.initial))
                 write_index(out, study, results, description)
             bar.update(len(results))
         bar.close()

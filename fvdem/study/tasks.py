@@ -7,7 +7,7 @@ import json
 import time
 from pathlib import Path
 
-from ..case import load_case
+from ..case import CaseError, load_case
 from typing import TYPE_CHECKING
 
 from .cluster import job_deadline
@@ -33,17 +33,21 @@ FAILED = "failed"
 PAUSED_RETURN_DELAY = 2.0
 
 
+def _summary(folder: Path) -> dict | None:
+    """A run folder's ``summary.json`` (None without one, or while it cannot be read: being written)."""
+    try:
+        return json.loads((Path(folder) / "summary.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        return None
+
+
 def _finished(folder: Path, case) -> bool:
     """Whether a run folder's summary shows the run at its end under ``case``: its end time reached, or ended
     early by a criterion the case still sets (settled; mixed ``time.stop_after_mixed`` ago, that margin not
     raised since)."""
     from ..scenes.observables import past_mixing
-    summary = folder / "summary.json"
-    if not summary.exists():
-        return False
-    try:
-        data = json.loads(summary.read_text())
-    except (OSError, json.JSONDecodeError):
+    data = _summary(folder)
+    if data is None:
         return False
     t, ended = case.time, data.get("ended") or ("settled" if data.get("settled") else None)
     return not data.get("stopped_early") and (
@@ -51,13 +55,20 @@ def _finished(folder: Path, case) -> bool:
         or (ended == "mixed" and past_mixing(data.get("t95"), t.stop_after_mixed, data["simulated_time"])))
 
 
+def run_finished(run: RunSpec) -> bool:
+    """Whether a study's run is at its end under its case as the study now sets it (False where the case
+    cannot be read: the study's own check names the cause)."""
+    try:
+        case = load_case(run.case, {**run.overrides, "output.progress": False})
+    except CaseError:
+        return False
+    return _finished(Path(run.folder), case)
+
+
 def _ended_early(folder: Path) -> bool:
     """Whether a run ended before its end time by its case's own criterion (settled, mixed)."""
-    try:
-        data = json.loads((folder / "summary.json").read_text())
-    except (OSError, json.JSONDecodeError):
-        return False
-    return not data.get("stopped_early") and bool(data.get("ended"))
+    data = _summary(folder)
+    return data is not None and not data.get("stopped_early") and bool(data.get("ended"))
 
 
 def _study_stop_file(folder) -> Path:
@@ -69,7 +80,7 @@ def _simulated_so_far(folder: Path, live: bool = False) -> float:
     """Simulated seconds a run folder holds: its summary's, else its checkpoint's (0 for a new run);
     ``live``: the last line of its time series instead of the checkpoint (a run in progress)."""
     try:
-        summary = json.loads((folder / "summary.json").read_text()) if (folder / "summary.json").exists() else None
+        summary = _summary(folder)
         if summary is not None and not summary.get("stopped_early"):
             return float(summary["simulated_time"])
         if live and (folder / "timeseries.csv").exists():
