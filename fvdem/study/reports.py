@@ -236,12 +236,12 @@ def restore(study, source) -> list:
         if run.bed and bed != run.bed:  # its bed, not only its settings: the replica's own bed
             changed = "; ".join(x for x in (changed, f"its bed: {bed!r} -> {run.bed!r}") if x)
         folder = Path(run.folder)
-        if changed:
+        if folder.exists() and any(folder.iterdir()):  # the study's own folder: its run resumes or is skipped
+            outcomes.append((run.name, "exists"))
+        elif changed:
             outcomes.append((run.name, f"case differs: {changed}"))
         elif not _finished(held, case):
             outcomes.append((run.name, "in progress"))
-        elif folder.exists() and any(folder.iterdir()):
-            outcomes.append((run.name, "exists"))
         else:
             folder.parent.mkdir(parents=True, exist_ok=True)
             shutil.copytree(held, folder, dirs_exist_ok=True)
