@@ -1138,3 +1138,24 @@ def test_the_eta_counts_only_what_this_invocation_simulated():
     line = progress_line(9, 44, "r", "finished", "", started, 70.0, 464.0, " simulated s", work_start=60.0)
     assert float(line.rsplit("ETA ", 1)[1].split()[0]) == pytest.approx(394.0 / 0.1, rel=0.01)
     assert progress_line(8, 44, "r", "skipped", "", started, 60.0, 464.0, work_start=60.0).endswith("ETA ?")
+
+
+def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_folders_now(tmp_path):
+    """Dask orders tasks by priority only on one worker, so the study holds its runs back and hands on as
+    many as there are free slots, the first by ``_priority`` as read from the run folders at that moment: a run
+    that has begun since the queue was made goes before every run not started."""
+    from fvdem.study.runner import _Queue
+    study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
+    queue = _Queue(study.runs, 2)
+    first = queue.take(0)
+    assert [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s, AR-1 listed first
+    assert queue.take(2) == [] and len(queue) == 42
+    late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.9_r2")
+    Path(late.folder).mkdir(parents=True)
+    (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
+    assert [r.name for r in queue.take(1)] == ["ar4_sp_u_over_umf2.9_r2"]  # begun elsewhere: in progress now
+    sizes = iter([3, 1])
+    live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
+    assert len(live.take(0)) == 3
+    assert live.take(3) == []  # the cluster is down to one thread: nothing more until runs end
+    assert len(live.drain()) == 2 and len(live) == 0

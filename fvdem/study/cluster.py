@@ -137,6 +137,12 @@ def load_cluster(path) -> dict:
     return cluster
 
 
+def worker_count(cluster: dict | None, workers: int | None, threads: int) -> int:
+    """How many workers (LocalCluster processes, or dask-jobqueue jobs at most) a client made by ``make_client``
+    has: ``--workers``, else the ``[cluster]`` table's ``workers``, else the cores over the run's threads."""
+    return workers or (cluster or {}).get("workers") or max(1, (os.cpu_count() or 1) // max(1, threads))
+
+
 def make_client(cluster: dict | None, scheduler: str | None, workers: int | None, threads: int):
     """A Dask client: on ``scheduler``, on a dask-jobqueue ``cluster`` table (a study's ``[cluster]``), or on
     a LocalCluster of ``workers`` processes (default: cores / threads). Returns ``(client, description)``."""
@@ -153,7 +159,7 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
         raise CaseError(problems)
     options = {k: v for k, v in cluster.items() if k not in ("kind", "workers")}
     kind = cluster.get("kind", "local")
-    count = workers or cluster.get("workers") or max(1, (os.cpu_count() or 1) // max(1, threads))
+    count = worker_count(cluster, workers, threads)
     if kind == "local":
         # Ctrl-C on a terminal signals the whole process group: the local workers ignore SIGINT (set
         # while they are spawned, and again by a plugin on any worker that replaces one), so that the

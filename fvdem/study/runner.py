@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from ..case import CaseError, load_case
-from .cluster import close_client, make_client
+from .cluster import close_client, make_client, worker_count
 from .reports import report_for
 from .sweep import BedSpec, RunSpec, Study
 from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, prepare_bed,
@@ -119,6 +119,33 @@ def _bed_priority(bed: BedSpec) -> int:
     return BED_RANK if bed.replica == 1 else -(bed.replica - 1) * REPLICA_RANK + REPLICA_RANK // 2
 
 
+class _Queue:
+    """The study's runs not yet handed to Dask, handed on in ``_priority`` order as read from their folders
+    when a slot frees, never more than ``slots`` at a time. Dask itself orders tasks by priority only among
+    those on one worker: runs submitted all at once go to the worker that settled their bed, so a worker
+    could begin a new run while a run in progress waited behind the other (2026-12-03)."""
+
+    def __init__(self, runs, slots):
+        self.runs, self.slots = list(runs), slots  # slots: a number, or a callable (the live cluster's size)
+
+    def __len__(self) -> int:
+        return len(self.runs)
+
+    def take(self, in_flight: int) -> list:
+        """The runs to submit now, first first: as many as free the slots left by ``in_flight`` runs."""
+        free = (self.slots() if callable(self.slots) else self.slots) - in_flight
+        if free <= 0 or not self.runs:
+            return []
+        self.runs.sort(key=_priority, reverse=True)
+        taken, self.runs = self.runs[:free], self.runs[free:]
+        return taken
+
+    def drain(self) -> list:
+        """The runs never handed on (the study is stopping)."""
+        taken, self.runs = self.runs, []
+        return taken
+
+
 class _StudyProgress:
     """The study's progress view: simulated seconds done over all runs (read from the run folders every
     ``poll`` seconds), runs done and the time left, as a tqdm bar on a terminal or a line every 2 % in a
@@ -215,10 +242,21 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
                                  priority=_priority(run))
 
         run_of, pending = {}, set()  # the futures live in ``pending`` only (a finished one is let go)
-        for run in study.runs:
-            future = submit(run, f"{tag}run-{run.name}")
-            run_of[future.key] = run
-            pending.add(future)
+        if scheduler:  # a running cluster: as many runs as it has threads now
+            queue = _Queue(study.runs, lambda: max(1, sum(client.nthreads().values())))
+        else:  # a LocalCluster's workers, or a dask-jobqueue cluster's jobs at most (adaptive: one per run)
+            queue = _Queue(study.runs, worker_count(study.cluster, workers, threads))
+
+        def top_up():
+            if (out / STOP_FILE).exists():  # runs not started do not start
+                for run in queue.drain():
+                    results.append({"name": run.name, "family": run.family, "status": "stopped", "folder": run.folder,
+                                    "simulated_seconds": _simulated_so_far(Path(run.folder)), "point": run.point})
+                return
+            for run in queue.take(len(pending)):
+                future = submit(run, f"{tag}run-{run.name}")
+                run_of[future.key] = run
+                pending.add(future)
         attempts = {r.name: 1 for r in study.runs}
         stalls: dict[str, tuple] = {}  # run -> (paused attempts in a row without progress, time reached)
 
@@ -252,7 +290,10 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         results = []
         write_index(out, study, description=description)
         bar = _StudyProgress(study, started, log)
-        while pending:
+        while pending or len(queue):
+            top_up()
+            if not pending:
+                continue
             try:
                 finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
             except TimeoutError:  # Dask's wait raises when nothing finished within the poll: show progress
