@@ -1154,6 +1154,10 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
     assert [r.name for r in queue.take(1)] == ["ar4_sp_u_over_umf2.9_r2"]  # begun elsewhere: in progress now
+    done = next(r for r in study.runs if r.name == "ar1_u_over_umf2.9_r1")  # at its end: handed on at once
+    Path(done.folder).mkdir(parents=True)
+    (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
+    assert [r.name for r in queue.take(2)] == ["ar1_u_over_umf2.9_r1"] and len(queue) == 40
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)) == 3

@@ -121,7 +121,8 @@ def _bed_priority(bed: BedSpec) -> int:
 
 class _Queue:
     """The study's runs not yet handed to Dask, handed on in ``_priority`` order as read from their folders
-    when a slot frees, never more than ``slots`` at a time. Dask itself orders tasks by priority only among
+    when a slot frees, never more than ``slots`` at a time (runs at their end, which are only skipped, at
+    once). Dask itself orders tasks by priority only among
     those on one worker: runs submitted all at once go to the worker that settled their bed, so a worker
     could begin a new run while a run in progress waited behind the other (2026-12-03)."""
 
@@ -132,13 +133,16 @@ class _Queue:
         return len(self.runs)
 
     def take(self, in_flight: int) -> list:
-        """The runs to submit now, first first: as many as free the slots left by ``in_flight`` runs."""
-        free = (self.slots() if callable(self.slots) else self.slots) - in_flight
+        """The runs to submit now, first first: those at their end (skipped at once: they only read their
+        summary), then as many as free the slots left by ``in_flight`` runs."""
+        ended = [r for r in self.runs if run_finished(r)]
+        self.runs = [r for r in self.runs if r not in ended]
+        free = (self.slots() if callable(self.slots) else self.slots) - in_flight - len(ended)
         if free <= 0 or not self.runs:
-            return []
+            return ended
         self.runs.sort(key=_priority, reverse=True)
         taken, self.runs = self.runs[:free], self.runs[free:]
-        return taken
+        return ended + taken
 
     def drain(self) -> list:
         """The runs never handed on (the study is stopping)."""
