@@ -728,10 +728,13 @@ def _fake_run(folder, family, ratio, entropy_rate, voidage):
     cells = [[index[i, j, k], index[i + 1, j, k], index[i + 1, j + 1, k], index[i, j + 1, k], index[i, j, k + 1],
               index[i + 1, j, k + 1], index[i + 1, j + 1, k + 1], index[i, j + 1, k + 1]]
              for i in range(2) for j in range(2) for k in range(4)]
+    from fvdem.io.vtk import write_pvd
     for snapshot in range(4):
         values = np.asarray(voidage, float)[(np.arange(16) + snapshot) % len(voidage)]
-        meshio.write(folder / f"gas_{snapshot:05d}.vtu", meshio.Mesh(points, [("hexahedron", cells)],
-                                                                  cell_data={"voidage": [values]}))
+        rising = np.column_stack([np.zeros(16), np.zeros(16), 1.0 + np.arange(16) % 3])
+        meshio.write(folder / f"gas_{snapshot:05d}.vtu", meshio.Mesh(points, [("hexahedron", cells)], cell_data={
+            "voidage": [values], "superficial_velocity": [rising]}))
+    write_pvd(folder / "gas.pvd", [(1.0 * k, f"gas_{k:05d}.vtu") for k in range(4)])
 
 
 def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_the_run_folders(tmp_path):
@@ -754,10 +757,15 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     report(out)
     table, findings = (json.loads((out / name).read_text()) for name in ("table.json", "findings.json"))
     assert {r["family"]: r["void_fraction_binarity"] is not None for r in table} == {"ar1": True, "ar4_mp": True}
+    # the channel record over 1-4 s (no inlet ramp): the 2 x 2 test grid's columns are all "inside" the
+    # column's 10 x 10 gas grid, so inside carries all the gas; spheres have no alignment
+    channels = [(r["corner_gas_share"], r["wall_gas_share"], r["rod_alignment_inside"]) for r in table]
+    assert channels == [(0.0, 0.0, None)] * 2
     dest = tmp_path / "docs" / "data" / "t"
     assert main(["study", str(out), "--archive", str(dest)]) == 0
     files = [p for p in dest.rglob("*") if p.is_file()]
     assert not [p for p in files if p.suffix in (".vtu", ".npz", ".pvd")]
+    assert all((dest / "runs" / r["name"] / "channels.json").exists() for r in runs)
     assert sum(p.stat().st_size for p in files) < 400_000
     # the study raised a run's duration after it ended ([[durations]]): archived again, the archive says so,
     # and its report shows the run with more to run (not as ended)

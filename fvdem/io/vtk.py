@@ -34,6 +34,16 @@ def write_particles_vtu(path, particles) -> None:
     os.replace(tmp, path)
 
 
+def read_pvd(path) -> list:
+    """The ``(time, file)`` rows of a PVD collection (``write_pvd``'s), in its order; [] without the file."""
+    import xml.etree.ElementTree as ET
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError):
+        return []
+    return [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")]
+
+
 def write_pvd(path, entries) -> None:
     """PVD collection; ``entries`` is a list of ``(time, relative_file_name)``."""
     lines = ['<?xml version="1.0"?>',

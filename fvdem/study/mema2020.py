@@ -436,8 +436,10 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     """t95 and t95 counted from when the inlet passes Umf, the bed's pressure drop over W/A and its
     fluctuation, the bed height and expansion, the largest cell gas speed over the inlet velocity over the same
     window (a channel's mark: 3.1-3.5 in AR-1's beds at 1.6-2.9 Umf, 5.5-5.8 in AR-4 MP's at 1.6, 8 there from
-    8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed), the mixing
-    entropy at the end and the void fractions' binarity."""
+    8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed), over the same
+    window the share of the rising gas in the corner and wall columns of the lower bed and the rods' mean |a_z|
+    inside and in the corners (``channel_record``), the mixing entropy at the end and the void fractions'
+    binarity."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
     gas = _gas(folder)
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
@@ -452,15 +454,83 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
             "bed_height": _bed_surface(series, ramp), "bed_expansion": _bed_expansion(series, ramp),
             "gas_max_speed_over_inlet": (None if fastest is None or gas is None or not gas.inlet_velocity
                                          else fastest / gas.inlet_velocity),
+            **(_channel_means(folder, ramp) if r["status"] != FAILED else {}),
             "final_mixing_entropy": (float(series["mixing_entropy"][-1])
                                      if series is not None and "mixing_entropy" in series else None),
             "void_fraction_binarity": None if record is None else record["binarity"]}
 
 
-def _archive_void_fractions(folder: Path, target: Path) -> None:
+CHANNELS = "channels.json"  # an archived run's channel record (``channel_record``)
+CHANNEL_LAYERS = (0.05, 0.2)  # m: the lower bed, where AR-4 MP's corner channels were found (2026-12-03)
+
+
+def channel_record(folder, window: tuple | None = None) -> dict | None:
+    """Per gas snapshot of a run (those at times in ``window`` [s], all without one): the share of the rising
+    gas in the corner, wall and inside columns over ``CHANNEL_LAYERS`` and, for rods, their mean |a_z| there by
+    the same classes (``fvdem.analysis.channels``). From the snapshots, else from an archived ``channels.json``;
+    None without either. ``{"z_range", "cells", "rows": [{"time", "gas_corner", ..., "alignment_inside"}]}``."""
+    import meshio
+    import numpy as np
+
+    from ..analysis.channels import gas_shares, rod_alignment
+    from ..io.vtk import read_pvd
+    folder = Path(folder)
+    wanted = (lambda t: True) if window is None else (lambda t: window[0] - 1e-9 <= t <= window[1] + 1e-9)
+    snapshots = [(t, name) for t, name in read_pvd(folder / "gas.pvd") if wanted(t)]
+    if not snapshots:
+        stored = folder / CHANNELS
+        if not stored.exists():
+            return None
+        record = json.loads(stored.read_text())
+        return {**record, "rows": [r for r in record["rows"] if wanted(r["time"])]}
+    try:
+        case = load_case(folder / "case.toml")
+    except (CaseError, OSError):
+        return None
+    lower, upper, cells = case.domain.lower, case.domain.upper, tuple(case.gas.cells)
+    rods = case.particles.shape == "spherocylinder"
+    particles = dict(read_pvd(folder / "particles.pvd")) if rods else {}
+    rows = []
+    for t, name in snapshots:
+        grid = meshio.read(folder / name)
+        centres = grid.points[grid.cells[0].data].mean(axis=1)
+        if "superficial_velocity" not in grid.cell_data:  # not a gas snapshot fvdem wrote
+            continue
+        flux = np.asarray(grid.cell_data["superficial_velocity"][0])[:, 2]
+        row = {"time": t, **{f"gas_{k}": v for k, v in
+                             gas_shares(centres, flux, lower, upper, cells, CHANNEL_LAYERS).items()}}
+        if t in particles and (folder / particles[t]).exists():
+            state = meshio.read(folder / particles[t])
+            row.update({f"alignment_{k}": v for k, v in rod_alignment(
+                state.points, state.point_data["axis"], lower, upper, cells, CHANNEL_LAYERS).items()})
+        rows.append(row)
+    return {"z_range": list(CHANNEL_LAYERS), "cells": list(cells), "rows": rows}
+
+
+def _channel_means(folder: Path, ramp: float | None) -> dict:
+    """The channel record's means over the window of ``_window_mean`` (``WINDOW_START`` after the ramp, for
+    ``WINDOW``): ``corner_gas_share``, ``wall_gas_share``, ``rod_alignment_inside`` and ``rod_alignment_corner``
+    (None where the run has no snapshots in it, or no rods)."""
+    keys = {"corner_gas_share": "gas_corner", "wall_gas_share": "gas_wall", "rod_alignment_inside": "alignment_inside",
+            "rod_alignment_corner": "alignment_corner"}
+    start = (ramp or 0.0) + WINDOW_START
+    record = channel_record(folder, (start, start + WINDOW))
+    rows = [] if record is None else record["rows"]
+    means = {}
+    for column, key in keys.items():
+        values = [r[key] for r in rows if r.get(key) is not None]
+        means[column] = float(sum(values) / len(values)) if values else None
+    return means
+
+
+def _archive_extra(folder: Path, target: Path) -> None:
+    """What an archived run keeps of its snapshots: the void-fraction record and the channel record."""
     record = void_fraction_record(folder)
     if record is not None:
         (target / VOID_FRACTION).write_text(json.dumps(record) + "\n")
+    channels = channel_record(folder)
+    if channels is not None:
+        (target / CHANNELS).write_text(json.dumps(channels) + "\n")
 
 
 def _headline(result: dict) -> str:
@@ -475,4 +545,4 @@ register_report(StudyReport(
                       "rms_speed", "max_overlap_over_diameter", "gas_max_speed"),
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",
                       "bed_height", "mixing_cells"),
-    archive_extra=_archive_void_fractions))
+    archive_extra=_archive_extra))
