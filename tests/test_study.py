@@ -1064,7 +1064,7 @@ def test_the_generic_report_writes_the_table_alone(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_study_lost_with_its_machine_continues_from_its_archive(tmp_path, capsys):
+def test_a_study_lost_with_its_machine_continues_from_its_archive(tmp_path, capsys, monkeypatch):
     """fvdem study STUDY --out NEW --restore ARCHIVE: the runs the archive holds at their end are copied into
     NEW and skipped, with no bed settled for them; a run the archive holds in progress starts again (an
     archive has no checkpoint) from a bed settled again, and ends bit-for-bit as it did on the lost machine;
@@ -1090,6 +1090,18 @@ def test_a_study_lost_with_its_machine_continues_from_its_archive(tmp_path, caps
     assert "restore from" in err and "2 restored" in err
     assert not (tmp_path / "new" / "beds").exists()  # no run needed its bed
     assert "restored from the archive" in (tmp_path / "new" / "runs" / first / "run.log").read_text()
+    # stopped before the queue hands anything on: runs at their end still come back "skipped", not "stopped"
+    # (a stopped campaign once listed its finished runs as stopped, and its archive's findings lost them)
+    import fvdem.study.runner as runner
+    progress = runner._StudyProgress.__init__
+
+    def stop_at_once(self, *args):
+        progress(self, *args)
+        request_stop(tmp_path / "new")
+    monkeypatch.setattr(runner._StudyProgress, "__init__", stop_at_once)
+    result = run_study(load_study(path, tmp_path / "new"), tmp_path / "new", workers=1, log=lambda line: None)
+    assert [r["status"] for r in result["runs"]] == ["skipped", "skipped"] and result.get("stopped")
+    monkeypatch.undo()
     # the archive holds the second run in progress (the machine was lost while it ran)
     summary = dest / "runs" / second / "summary.json"
     summary.write_text(json.dumps({**json.loads(summary.read_text()), "simulated_time": 0.01, "stopped_early": True}))
@@ -1171,3 +1183,20 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     assert len(live.take(0)) == 3
     assert live.take(3) == []  # the cluster is down to one thread: nothing more until runs end
     assert len(live.drain()) == 2 and len(live) == 0
+
+
+def test_a_run_listed_in_progress_whose_summary_shows_its_end_is_reported_ended(tmp_path):
+    """The index can lag its runs (a study stopped before it handed a finished run on listed it "stopped"):
+    the report goes by the run's summary, at its end and not stopped early, and counts it ended."""
+    from fvdem.study import report
+    out = tmp_path / "study"
+    folder = out / "runs" / "ar1_u_over_umf2"
+    _fake_run(folder, "ar1", 2.0, 0.5, [0.4, 0.9])
+    entry = {"name": folder.name, "family": "ar1", "status": "stopped", "folder": str(folder), "replica": 1,
+             "point": {"gas.u_over_umf": 2.0}, "duration": 4.0}
+    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [entry]}))
+    report(out)
+    assert json.loads((out / "table.json").read_text())[0]["status"] == "finished"
+    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [{**entry, "duration": 8.0}]}))
+    report(out)  # a longer duration than its summary reached: still on its way
+    assert json.loads((out / "table.json").read_text())[0]["status"] == "stopped"

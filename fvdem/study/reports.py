@@ -108,6 +108,9 @@ def report(out) -> list:
         elif r.get("duration") and r["status"] in ENDED and not data.get("ended") and \
                 float(data.get("simulated_time") or 0.0) < r["duration"] * (1 - 1e-9):
             r = {**r, "status": "pending"}  # reached the end it had before its duration was raised: more to run
+        elif r["status"] in IN_PROGRESS and data and not data.get("stopped_early") and (data.get("ended") or (
+                r.get("duration") and float(data.get("simulated_time") or 0.0) >= r["duration"] * (1 - 1e-9))):
+            r = {**r, "status": "finished"}  # its summary shows its end: the index was written before its result
         if r["status"] != FAILED and (Path(r["folder"]) / "timeseries.csv").exists():
             drawn.append(r)  # the figures get each run with the status derived here (and its live values)
         row = {"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"]}

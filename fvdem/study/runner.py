@@ -252,12 +252,13 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             queue = _Queue(study.runs, worker_count(study.cluster, workers, threads))
 
         def top_up():
-            if (out / STOP_FILE).exists():  # runs not started do not start
-                for run in queue.drain():
+            handed = queue.take(len(pending))
+            if (out / STOP_FILE).exists():  # runs not started do not start; runs at their end still say so
+                for run in [r for r in handed if not run_finished(r)] + queue.drain():
                     results.append({"name": run.name, "family": run.family, "status": "stopped", "folder": run.folder,
                                     "simulated_seconds": _simulated_so_far(Path(run.folder)), "point": run.point})
-                return
-            for run in queue.take(len(pending)):
+                handed = [r for r in handed if run_finished(r)]
+            for run in handed:
                 future = submit(run, f"{tag}run-{run.name}")
                 run_of[future.key] = run
                 pending.add(future)
