@@ -122,9 +122,9 @@ def _bed_priority(bed: BedSpec) -> int:
 class _Queue:
     """The study's runs not yet handed to Dask, handed on in ``_priority`` order as read from their folders
     when a slot frees, never more than ``slots`` at a time (runs at their end, which are only skipped, at
-    once). Dask itself orders tasks by priority only among
-    those on one worker: runs submitted all at once go to the worker that settled their bed, so a worker
-    could begin a new run while a run in progress waited behind the other (2026-12-03)."""
+    once). Dask itself orders tasks by priority only among those on one worker: runs submitted all at once go
+    to the worker that settled their bed, so a worker could begin a new run while a run in progress waited
+    behind the other (2026-12-03)."""
 
     def __init__(self, runs, slots):
         self.runs, self.slots = list(runs), slots  # slots: a number, or a callable (the live cluster's size)
@@ -254,10 +254,11 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
         def top_up():
             handed = queue.take(len(pending))
             if (out / STOP_FILE).exists():  # runs not started do not start; runs at their end still say so
-                for run in [r for r in handed if not run_finished(r)] + queue.drain():
+                ended = [r for r in handed if run_finished(r)]
+                for run in [r for r in handed if r not in ended] + queue.drain():
                     results.append({"name": run.name, "family": run.family, "status": "stopped", "folder": run.folder,
                                     "simulated_seconds": _simulated_so_far(Path(run.folder)), "point": run.point})
-                handed = [r for r in handed if run_finished(r)]
+                handed = ended
             for run in handed:
                 future = submit(run, f"{tag}run-{run.name}")
                 run_of[future.key] = run
