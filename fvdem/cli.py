@@ -167,6 +167,9 @@ def cmd_study(args) -> int:
         from .study import load_cluster
         study = replace(study, cluster=load_cluster(args.cluster))
     log = (lambda line: print(line, file=sys.stderr, flush=True))
+    code = _changed_folders(study, args.out, args.supersede, log)
+    if code:
+        return code
     if args.restore:
         code = _restore(study, args.restore, log)
         if code:
@@ -188,6 +191,26 @@ def cmd_study(args) -> int:
             "continues the study")
     print(json.dumps(result) if args.json else json.dumps(result, indent=1))
     return 130 if result.get("stopped") else (1 if failed else 0)
+
+
+def _changed_folders(study, out, supersede: bool, log) -> int:
+    """Folders of ``out`` started with other physics than ``study`` now sets: refused (exit 2, each named with
+    the keys that differ), or with ``--supersede`` moved to ``out/superseded/`` (one line each)."""
+    from .study.folders import SUPERSEDED, changed_folders
+    from .study.folders import supersede as move_aside
+    changed = changed_folders(study)
+    if not changed:
+        return 0
+    lines = [f"  {spec.folder}: {keys}" for spec, keys in changed]
+    if not supersede:
+        return _fail(f"{len(changed)} folder(s) in {out} were started with other physics than {study.path} now "
+                     "sets:\n" + "\n".join(lines) + f"\nrun again with --supersede to move them to {out}/{SUPERSEDED}/ "
+                     "and start their runs again, or restore the study file's settings")
+    from .provenance import describe, provenance
+    moves = [(spec.name, spec.folder, keys) for spec, keys in changed]
+    for (spec, keys), dest in zip(changed, move_aside(out, moves, describe(provenance()))):
+        log(f"superseded: {spec.name} ({keys}) moved to {dest}; it starts again")
+    return 0
 
 
 def _restore(study, source, log) -> int:
@@ -390,6 +413,10 @@ def make_parser() -> argparse.ArgumentParser:
                        help="first copy into --out the runs an archive of this study (--archive) holds at their "
                             "end, so that they are skipped (a study folder lost with its machine); never over a "
                             "run folder that exists; runs the archive holds in progress start again")
+    study.add_argument("--supersede", action="store_true",
+                       help="move bed and run folders that were started with other physics than the study file now "
+                            "sets (a changed setting) to --out's superseded/ and run them again; without it such "
+                            "folders are refused before anything runs, each named with the keys that differ")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
     study.add_argument("--stop", action="store_true",
                        help="ask the study running in this folder to stop (its runs checkpoint first)")

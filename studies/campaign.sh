@@ -13,6 +13,8 @@
 # eighteenth session, 2026-12-03: ~/fvdem-runs was gone) loses only the runs in progress: the study starts
 # with --restore from its archive, which copies the runs the archive holds at their end into the study
 # folder (never over a run folder there), so that they are skipped and no bed settles again for them.
+# Extra arguments go to fvdem study: after a setting of the study file changed, run it once as
+# `studies/campaign.sh --supersede` (the runs of the old setting move to superseded/, nothing is deleted).
 # Two runs at a time, one numba thread each (more threads than free cores stall OpenMP: docs/benchmarks.md).
 # Stage 1 (studies/mema2020_stage1.toml) has ended; docs/data/mema2020_stage1 holds all its runs (its
 # folder comes back with: fvdem study studies/mema2020_stage1.toml --out DIR --restore docs/data/mema2020_stage1).
@@ -26,4 +28,4 @@ export DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL="${DASK_DISTRIBUTED__SCHEDULER__W
 [ -x .venv/bin/fvdem ] || make venv
 OUT=${FVDEM_RUNS:-$HOME/fvdem-runs}
 .venv/bin/fvdem study studies/mema2020_stage2.toml --out "$OUT/mema2020_stage2" --workers 2 \
-    --restore docs/data/mema2020
+    --restore docs/data/mema2020 "$@"

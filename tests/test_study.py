@@ -1200,3 +1200,84 @@ def test_a_run_listed_in_progress_whose_summary_shows_its_end_is_reported_ended(
     (out / "study.json").write_text(json.dumps({"study": "t", "runs": [{**entry, "duration": 8.0}]}))
     report(out)  # a longer duration than its summary reached: still on its way
     assert json.loads((out / "table.json").read_text())[0]["status"] == "stopped"
+
+
+def test_folders_started_under_another_definition_are_named_with_the_keys_that_differ(tmp_path):
+    """A study file changed since its runs began (a family's setting): each folder whose case.toml holds other
+    physics than the study now sets is listed with the keys (before -> now); a run whose bed changed is listed
+    with it; folders of unchanged runs, restored ones (their bed's state elsewhere) and run settings that a
+    resumed run may change (time.end, output.*) are not."""
+    from fvdem.case import load_case, to_toml
+    from fvdem.study.folders import changed_folders
+    text = (ROOT / "studies" / "mema2020_stage2.toml").read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+    path = tmp_path / "stage2.toml"
+    path.write_text(text)
+    study = load_study(path, tmp_path / "out")
+    runs = {r.name: r for r in study.runs}
+    beds = {b.name: b for b in study.beds}
+
+    def started(spec, **more):
+        Path(spec.folder).mkdir(parents=True)
+        case = load_case(spec.case, {**spec.overrides, **more})
+        Path(spec.folder, "case.toml").write_text(to_toml(case))
+    for name in ("ar1_u_over_umf2_r1", "ar4_sp_u_over_umf1.6_r1", "ar4_mp_u_over_umf2.9_r2"):
+        started(runs[name], **{"time.end": 30.0, "output.snapshot_interval": 1.0,
+                               "particles.initial_state": str(tmp_path / "elsewhere" / "final_state.npz")})
+    started(beds["ar1_r2"])
+    assert changed_folders(study) == []
+    # the SP family's reference velocity and the second AR-1 bed's insertion seed changed since
+    path.write_text(text.replace('set = {"gas.umf" = 1.896}  # the AR-4 bed', 'set = {"gas.umf" = 1.7}  #').replace(
+        '[beds.ar1]\ncase = "', '[beds.ar1]\nset = {"particles.insertion.seed" = 7}\ncase = "'))
+    started(runs["ar1_u_over_umf1.7_r2"])
+    listed = {spec.name: keys for spec, keys in changed_folders(load_study(path, tmp_path / "out"))}
+    assert listed == {
+        "ar4_sp_u_over_umf1.6_r1": "gas.inlet_velocity: 3.0336 -> 2.72; gas.umf: 1.896 -> 1.7",
+        "ar1_r2": "particles.insertion.seed: 2 -> 8",  # replica 2's own bed: the seed + 1
+        "ar1_u_over_umf1.7_r2": "its bed ar1_r2 changed"}
+
+
+@pytest.mark.slow
+def test_a_changed_study_is_refused_then_superseded_in_its_folder_and_its_archive(tmp_path, capsys):
+    """fvdem study with a study file whose family setting changed since its runs ran: refused (exit 2, every
+    folder named with the keys, no traceback, nothing moved); with --supersede the old folders move to
+    OUT/superseded/ (with the reason) and their runs run again under the new case; the archive then moves its
+    copies of the old runs to its own superseded/ and holds the new ones, so that its report is of one
+    definition; nothing is deleted."""
+    from fvdem.cli import main
+    from fvdem.study import archive
+    path = tmp_path / "smoke.toml"
+    path.write_text(SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/'))
+    out, dest = tmp_path / "study", tmp_path / "archive"
+
+    def study(*args):
+        capsys.readouterr()
+        code = main(["study", str(path), "--out", str(out), "--workers", "1", "--json", *args])
+        captured = capsys.readouterr()
+        return code, (json.loads(captured.out) if code == 0 else None), captured.err
+
+    assert study()[0] == 0
+    archive(out, dest)
+    first, second = (r.name for r in load_study(path, out).runs)
+    before = (out / "runs" / first / "timeseries.csv").read_text()
+    path.write_text(path.read_text().replace('"gas.inlet_ramp" = 0.005', '"gas.inlet_ramp" = 0.005\n'
+                                             '"contact.friction" = 0.2'))
+    code, _, err = study()
+    assert code == 2 and "2 folder(s)" in err and "Traceback" not in err and "--supersede" in err
+    assert f"{out / 'runs' / first}: contact.friction: 0.46 -> 0.2" in err
+    assert not (out / "superseded").exists() and (out / "runs" / first / "timeseries.csv").read_text() == before
+    code, result, err = study("--supersede")
+    assert code == 0 and [r["status"] for r in result["runs"]] == ["finished", "finished"]
+    assert f"superseded: {first} (contact.friction: 0.46 -> 0.2) moved to {out / 'superseded' / first}" in err
+    assert (out / "superseded" / first / "timeseries.csv").read_text() == before
+    assert "contact.friction" in (out / "superseded" / first / "SUPERSEDED.txt").read_text()
+    assert (out / "runs" / first / "timeseries.csv").read_text() != before
+    assert '\nfriction = 0.2' in (out / "runs" / first / "case.toml").read_text()
+    assert study()[0] == 0  # the same command again: nothing to supersede, both skipped
+    written = archive(out, dest)
+    assert dest / "superseded" / first in written and dest / "superseded" / second in written
+    assert "\nfriction = 0.46" in (dest / "superseded" / first / "case.toml").read_text()
+    assert "\nfriction = 0.2" in (dest / "runs" / first / "case.toml").read_text()
+    assert ((dest / "runs" / first / "timeseries.csv").read_text()
+            != (dest / "superseded" / first / "timeseries.csv").read_text())
+    archive(out, dest)  # again: the archive holds the new definition, nothing more moves
+    assert sorted(p.name for p in (dest / "superseded").iterdir()) == sorted([first, second])

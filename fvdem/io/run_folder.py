@@ -99,14 +99,35 @@ def physics_changes(case: Case, out: Path, also_safe=()) -> str:
     if not path.exists():
         return ""
     try:
-        before = _flatten(tomllib.loads(path.read_text()))
+        before = path.read_text()
+        return case_text_changes(before, to_toml(case), also_safe)
     except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise OutputError(f"{path} cannot be read ({exc}); it records the case the run was started with")
-    now = _flatten(tomllib.loads(to_toml(case)))
-    changed = [key for key in sorted(set(before) | set(now))
-               if before.get(key) != now.get(key) and not any(
-                   key == safe or (safe.endswith(".") and key.startswith(safe)) for safe in (*RESUME_SAFE, *also_safe))]
+
+
+def case_text_changes(before: str, now: str, also_safe=()) -> str:
+    """The physics keys (``physics_items``) in which two case files' texts differ, with their values before and
+    now ("key: before -> now; ..."); "" where they agree."""
+    before, now = physics_items(before, also_safe), physics_items(now, also_safe)
+    changed = [key for key in sorted(set(before) | set(now)) if before.get(key) != now.get(key)]
     return "; ".join(f"{k}: {before.get(k, '(unset)')!r} -> {now.get(k, '(unset)')!r}" for k in changed)
+
+
+def physics_items(toml_text: str, also_safe=()) -> dict:
+    """A case file's physics: its keys (dotted, flattened) and values beyond ``RESUME_SAFE`` and ``also_safe``
+    (a key, or a prefix ending in "."): what a resumed run keeps."""
+    import tomllib
+    return {key: value for key, value in _flatten(tomllib.loads(toml_text)).items()
+            if not any(key == safe or (safe.endswith(".") and key.startswith(safe))
+                       for safe in (*RESUME_SAFE, *also_safe))}
+
+
+def physics_fingerprint(toml_text: str, also_safe=()) -> str:
+    """A short hash of ``physics_items``: equal for two case files exactly when their physics agree (a study
+    records it per run, so that its archive can tell a run of an older definition)."""
+    import hashlib
+    items = json.dumps(sorted(physics_items(toml_text, also_safe).items()), default=repr)
+    return hashlib.sha256(items.encode()).hexdigest()[:16]
 
 
 def _flatten(table, prefix=""):

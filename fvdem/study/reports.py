@@ -144,7 +144,8 @@ def archive(out, dest) -> list:
     report's extra files (seed 000's: the void-fraction record) and its ``run.log``; plus the study's
     ``study.json`` (folders relative to ``dest``) and ``study.toml``, and the report made from them. No
     checkpoints, states or VTU files. ``fvdem study DEST --report`` rebuilds the report and findings from
-    ``dest`` alone. A run already in ``dest`` is replaced only by one that holds more simulated time.
+    ``dest`` alone. A run already in ``dest`` is replaced only by one that holds more simulated time, or moved
+    to ``dest/superseded/`` where the study now sets other physics for it (``fvdem study --supersede``).
     Returns the files written."""
     out, dest = Path(out), Path(dest)
     index = json.loads((out / "study.json").read_text())
@@ -154,13 +155,16 @@ def archive(out, dest) -> list:
     runs = {r["name"]: r for r in kept["runs"]}
     written = []
     for r in index["runs"]:
-        folder = Path(r["folder"])
+        folder, target = Path(r["folder"]), dest / "runs" / r["name"]
+        moved = _supersede_archived(target, r, dest, folder)  # archived under an older definition of the run
+        if moved:
+            runs.pop(r["name"], None)
+            written.append(moved)
         series = _series(folder)
         if series is None:  # listed without a folder (not started yet): the archive still counts every run
             runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}", "simulated_seconds": 0.0})
             _refresh_duration(runs[r["name"]], r)
             continue
-        target = dest / "runs" / r["name"]
         held = _simulated_so_far(target, live=True) if target.exists() else -1.0
         columns = [c for c in ("time", *chosen.archived_columns) if c in series]
         if float(series["time"][-1]) < held or float(series["time"][-1]) == held and not _lacks(target, columns):
@@ -193,6 +197,27 @@ def archive(out, dest) -> list:
     if (out / "study.toml").exists():
         (dest / "study.toml").write_text((out / "study.toml").read_text())
     return written + report(dest)
+
+
+def _supersede_archived(target: Path, entry: dict, dest: Path, folder: Path) -> Path | None:
+    """Move an archived run to ``dest/superseded/`` (as ``fvdem study --supersede`` moves a run folder) where the
+    study now sets other physics for it (``entry["physics"]``, written by ``write_index``; an entry without one,
+    from an older ``study.json``, is taken as current) than it was archived with; its results stay, out of the
+    report. ``folder``: the run's folder in the study, whose ``case.toml`` names the keys. Returns the new place."""
+    from ..io.run_folder import case_text_changes, physics_fingerprint
+    from ..provenance import describe, provenance
+    from .folders import supersede
+    from .sweep import BED_STATE
+    if not entry.get("physics") or not (target / "case.toml").exists():
+        return None
+    held = (target / "case.toml").read_text()
+    if physics_fingerprint(held, BED_STATE) == entry["physics"]:
+        return None
+    now = Path(folder) / "case.toml"
+    keys = case_text_changes(held, now.read_text(), BED_STATE) if now.exists() else "the study file changed"
+    if not keys:  # the study folder's run is of the archived definition too (not superseded there yet)
+        return None
+    return supersede(dest, [(entry["name"], str(target), keys)], describe(provenance()))[0]
 
 
 def _lacks(target: Path, columns: list) -> bool:

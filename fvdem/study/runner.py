@@ -374,7 +374,8 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     latest = {r["name"]: r for r in record.get("runs", [])}
     latest.update({r["name"]: r for r in results})
     names = [r.name for r in study.runs]
-    runs = ([{**(latest.get(r.name) or _pending(r)), "replica": r.replica, "duration": r.duration} for r in study.runs]
+    runs = ([{**(latest.get(r.name) or _pending(r)), "replica": r.replica, "duration": r.duration, "physics": r.physics}
+             for r in study.runs]
             + [r for n, r in latest.items() if n not in names])
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
              "report": study.report,

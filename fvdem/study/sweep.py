@@ -7,11 +7,15 @@ import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..case import CaseError, load_case
+from ..case import CaseError, load_case, to_toml
+from ..io.run_folder import physics_fingerprint
 from .checks import _did_you_mean, _problem, _table, read_toml
 from .cluster import check_cluster
 from .reports import DEFAULT_REPORT, REPORTS, report_for
 
+
+# a run's starting state: the study gives it its bed's final state when the bed has settled (not a change of physics)
+BED_STATE = ("particles.initial_state",)
 
 STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
               "durations", "cluster", "report"}
@@ -31,6 +35,7 @@ class RunSpec:
     duration: float = 0.0  # simulated seconds (the study's, or its family's own)
     replica: int = 1  # 1, 2, ...: replica k >= 2 starts from its own bed (insertion seed + k - 1)
     report: str = DEFAULT_REPORT  # the study's report: which values of its summary the run's result carries
+    physics: str = ""  # its case's physics_fingerprint (its bed's state aside): tells a folder of an older case
 
 
 @dataclass(frozen=True)
@@ -40,6 +45,7 @@ class BedSpec:
     overrides: dict
     folder: str
     replica: int = 1  # the replica whose runs start from it (``_bed_priority``)
+    physics: str = ""  # its case's physics_fingerprint
 
 
 @dataclass(frozen=True)
@@ -187,15 +193,17 @@ def study_from_table(table: dict, path, out) -> Study:
     cluster = _table(table, "cluster", problems)
     check_cluster(cluster, problems)
     # every case is checked before anything runs (a bed's final state does not exist yet: not loaded)
+    checked = {}
     for spec in list(beds) + runs:
         overrides = dict(spec.overrides)
         try:
-            load_case(spec.case, overrides)
+            checked[id(spec)] = physics_fingerprint(to_toml(load_case(spec.case, overrides)), BED_STATE)
         except CaseError as exc:
             label = spec.name if SAFE_NAME.match(spec.name) else f"[{spec.name!r}]"  # refused above as well
             problems += [f"{label}: {p}" for p in exc.problems]
     if problems:
         raise CaseError(problems)
+    beds, runs = ([replace(s, physics=checked[id(s)]) for s in specs] for specs in (beds, runs))
     return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report)
 
 
