@@ -1167,21 +1167,22 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     from fvdem.study.runner import _Queue
     study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
     queue = _Queue(study.runs, 2)
-    first = queue.take(0)
-    assert [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s, AR-1 listed first
-    assert queue.take(2) == [] and len(queue) == 42
+    ended, first = queue.take(0)
+    assert ended == [] and [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s
+    assert queue.take(2) == ([], []) and len(queue) == 42
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.9_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
-    assert [r.name for r in queue.take(1)] == ["ar4_sp_u_over_umf2.9_r2"]  # begun elsewhere: in progress now
+    assert [r.name for r in queue.take(1)[1]] == ["ar4_sp_u_over_umf2.9_r2"]  # begun elsewhere: in progress now
     done = next(r for r in study.runs if r.name == "ar1_u_over_umf2.9_r1")  # at its end: handed on at once
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
-    assert [r.name for r in queue.take(2)] == ["ar1_u_over_umf2.9_r1"] and len(queue) == 40
+    ended, taken = queue.take(2)
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 40
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
-    assert len(live.take(0)) == 3
-    assert live.take(3) == []  # the cluster is down to one thread: nothing more until runs end
+    assert len(live.take(0)[1]) == 3
+    assert live.take(3) == ([], [])  # the cluster is down to one thread: nothing more until runs end
     assert len(live.drain()) == 2 and len(live) == 0
 
 

@@ -100,16 +100,23 @@ def _priority(run: RunSpec) -> int:
     first, longest first: DEM steps left (duration minus what the folder holds, over the DEM step), less
     ``REPLICA_RANK`` per replica after the first. A campaign cut short has every point of the study once
     before it has any twice."""
+    return _standing(run)[1]
+
+
+def _standing(run: RunSpec) -> tuple[bool, int]:
+    """Whether ``run`` is at its end (``run_finished``) and its ``_priority``, from one read of its case and
+    folder."""
     rank = -(run.replica - 1) * REPLICA_RANK
     try:
         case = load_case(run.case, {**run.overrides, "output.progress": False})
     except CaseError:
-        return rank
+        return False, rank
     so_far = _simulated_so_far(Path(run.folder))
     steps_left = int(round(max(0.0, run.duration - so_far) / float(case.time.dem_step)))
-    if so_far > 0 and not _finished(Path(run.folder), case):
-        return IN_PROGRESS_RANK - steps_left
-    return rank + steps_left
+    finished = _finished(Path(run.folder), case)
+    if so_far > 0 and not finished:
+        return False, IN_PROGRESS_RANK - steps_left
+    return finished, rank + steps_left
 
 
 def _bed_priority(bed: BedSpec) -> int:
@@ -132,17 +139,19 @@ class _Queue:
     def __len__(self) -> int:
         return len(self.runs)
 
-    def take(self, in_flight: int) -> list:
-        """The runs to submit now, first first: those at their end (skipped at once: they only read their
-        summary), then as many as free the slots left by ``in_flight`` runs."""
-        ended = [r for r in self.runs if run_finished(r)]
-        self.runs = [r for r in self.runs if r not in ended]
+    def take(self, in_flight: int) -> tuple[list, list]:
+        """The runs to submit now: those at their end (skipped at once: they only read their summary), and, first
+        first, as many others as free the slots left by ``in_flight`` runs. Each run's case and folder are
+        read once."""
+        standing = {r.name: _standing(r) for r in self.runs}
+        ended = [r for r in self.runs if standing[r.name][0]]
+        self.runs = [r for r in self.runs if not standing[r.name][0]]
         free = (self.slots() if callable(self.slots) else self.slots) - in_flight - len(ended)
         if free <= 0 or not self.runs:
-            return ended
-        self.runs.sort(key=_priority, reverse=True)
+            return ended, []
+        self.runs.sort(key=lambda r: standing[r.name][1], reverse=True)
         taken, self.runs = self.runs[:free], self.runs[free:]
-        return ended + taken
+        return ended, taken
 
     def drain(self) -> list:
         """The runs never handed on (the study is stopping)."""
@@ -252,14 +261,13 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
             queue = _Queue(study.runs, worker_count(study.cluster, workers, threads))
 
         def top_up():
-            handed = queue.take(len(pending))
+            ended, taken = queue.take(len(pending))
             if (out / STOP_FILE).exists():  # runs not started do not start; runs at their end still say so
-                ended = [r for r in handed if run_finished(r)]
-                for run in [r for r in handed if r not in ended] + queue.drain():
+                for run in taken + queue.drain():
                     results.append({"name": run.name, "family": run.family, "status": "stopped", "folder": run.folder,
                                     "simulated_seconds": _simulated_so_far(Path(run.folder)), "point": run.point})
-                handed = ended
-            for run in handed:
+                taken = []
+            for run in ended + taken:
                 future = submit(run, f"{tag}run-{run.name}")
                 run_of[future.key] = run
                 pending.add(future)
