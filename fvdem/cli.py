@@ -154,7 +154,14 @@ def cmd_study(args) -> int:
     if args.report and args.out:  # a study file and its folder: report what the folder holds now
         if not Path(args.out).is_dir():
             return _fail(f"--out {args.out}: no such study folder")
-        write_index(args.out, load_study(target, args.out))
+        study = load_study(target, args.out)
+        from .study.folders import changed_folders
+        changed = changed_folders(study)
+        if changed:  # the report still says what the folders hold; a warning names them
+            print(f"fvdem: warning: {len(changed)} folder(s) in {args.out} hold other physics than {target} now sets; "
+                  "their rows are of the old case (fvdem study ... --supersede runs them again):\n" + "\n".join(
+                      f"  {spec.folder}: {keys}" for spec, keys in changed), file=sys.stderr)
+        write_index(args.out, study)
         for path in report(args.out):
             print(path)
         return 0

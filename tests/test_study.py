@@ -1266,6 +1266,8 @@ def test_a_changed_study_is_refused_then_superseded_in_its_folder_and_its_archiv
     assert code == 2 and "2 folder(s)" in err and "Traceback" not in err and "--supersede" in err
     assert f"{out / 'runs' / first}: contact.friction: 0.46 -> 0.2" in err
     assert not (out / "superseded").exists() and (out / "runs" / first / "timeseries.csv").read_text() == before
+    assert main(["study", str(path), "--out", str(out), "--report"]) == 0  # reports what is there, with a warning
+    assert "warning: 2 folder(s)" in capsys.readouterr().err
     code, result, err = study("--supersede")
     assert code == 0 and [r["status"] for r in result["runs"]] == ["finished", "finished"]
     assert f"superseded: {first} (contact.friction: 0.46 -> 0.2) moved to {out / 'superseded' / first}" in err
