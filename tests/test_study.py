@@ -1225,6 +1225,14 @@ def test_folders_started_under_another_definition_are_named_with_the_keys_that_d
         started(runs[name], **{"time.end": 30.0, "output.snapshot_interval": 1.0,
                                "particles.initial_state": str(tmp_path / "elsewhere" / "final_state.npz")})
     started(beds["ar1_r2"])
+    # a case.toml written by an older fvdem, before a key existed: the run ran as the key's default runs
+    older = Path(runs["ar1_u_over_umf2_r1"].folder, "case.toml")
+    text_then = older.read_text()
+    older.write_text(text_then.replace("\nscheme = ", "\n# scheme = ").replace("\ncount = ", "\n# count = "))
+    assert "\nscheme" not in older.read_text() and "\ncount" not in older.read_text()
+    assert [(spec.name, keys) for spec, keys in changed_folders(study)] == [  # the bed's count is not the default's
+        ("ar1_u_over_umf2_r1", "particles.count: 1000 -> 32500")]
+    older.write_text(text_then.replace("\nscheme = ", "\n# scheme = "))  # the scheme at its default: as before
     assert changed_folders(study) == []
     # the SP family's reference velocity and the second AR-1 bed's insertion seed changed since
     path.write_text(text.replace('set = {"gas.umf" = 1.896}  # the AR-4 bed', 'set = {"gas.umf" = 1.7}  #').replace(

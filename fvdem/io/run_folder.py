@@ -6,6 +6,7 @@ their ``*.vtu``, ``checkpoint.npz`` (replaced atomically), ``final_state.npz`` a
 """
 from __future__ import annotations
 
+import functools
 import json
 import os
 import shutil
@@ -115,11 +116,21 @@ def case_text_changes(before: str, now: str, also_safe=()) -> str:
 
 def physics_items(toml_text: str, also_safe=()) -> dict:
     """A case file's physics: its keys (dotted, flattened) and values beyond ``RESUME_SAFE`` and ``also_safe``
-    (a key, or a prefix ending in "."): what a resumed run keeps."""
+    (a key, or a prefix ending in "."): what a resumed run keeps. A key the file lacks is taken at its default:
+    a ``case.toml`` written by an older fvdem, before the key existed, ran as its default runs (a default
+    changed since shows: the older file holds the old value)."""
     import tomllib
-    return {key: value for key, value in _flatten(tomllib.loads(toml_text)).items()
+    flat = {**_default_case_items(), **_flatten(tomllib.loads(toml_text))}
+    return {key: value for key, value in flat.items()
             if not any(key == safe or (safe.endswith(".") and key.startswith(safe))
                        for safe in (*RESUME_SAFE, *also_safe))}
+
+
+@functools.lru_cache(maxsize=1)
+def _default_case_items() -> dict:
+    """Every key of the default case (``Case()``) with its value, flattened (read-only: shared)."""
+    import tomllib
+    return _flatten(tomllib.loads(to_toml(Case())))
 
 
 def physics_fingerprint(toml_text: str, also_safe=()) -> str:
