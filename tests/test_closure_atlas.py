@@ -20,7 +20,7 @@ def atlas(tmp_path_factory):
     import io
     buffer = io.StringIO()
     with contextlib.redirect_stdout(buffer):
-        assert closure_atlas.main(["--json", "--out", str(out)]) == 0
+        assert closure_atlas.main(["--json", "--out", str(out), "--solids-fraction", "0.54577", "0.51011", "0.53"]) == 0
     result = json.loads(buffer.getvalue().strip().splitlines()[-1])
     assert (out / "closure_atlas.png").stat().st_size > 10_000
     return result
@@ -41,6 +41,17 @@ def test_every_registered_drag_law_is_in_the_atlas_in_the_issue_format(atlas):
     # issue 18: under a minute. The tool's own CPU time, not its wall time, which another process on
     # the machine stretches (the suite beside three Umf ramps on two cores took 60 s of wall for it)
     assert atlas["cpu_seconds"] < 60
+
+
+def test_umf_at_a_given_packing_is_the_beds_own_at_theirs_and_falls_as_the_bed_packs_denser(atlas):
+    """--solids-fraction: at each bed's recorded packing the same Umf as the atlas's; at a denser packing a
+    lower one for every law (more drag per volume at the same gas velocity, as in Ergun's eps^3 / (1 - eps))."""
+    at = atlas["umf_at_solids_fraction"]
+    assert atlas["beds"]["ar1"]["solids_fraction"] == 0.54577 and atlas["beds"]["ar4"]["solids_fraction"] == 0.51011
+    for name, entry in atlas["laws"].items():
+        for bed, phi in (("ar1", "0.54577"), ("ar4", "0.51011")):
+            assert at[phi][name][bed] == (None if entry["umf"][bed] is None else pytest.approx(entry["umf"][bed]))
+        assert at["0.53"][name]["ar4"] < at["0.51011"][name]["ar4"]
 
 
 def test_gidaspow_holds_the_uniform_sphere_bed_at_erguns_umf(atlas):

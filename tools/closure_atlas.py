@@ -243,7 +243,13 @@ def main(argv=None) -> int:
                         help="record the settled beds' packing in --beds (runs/bed_ar1 and runs/bed_ar4, settled "
                              "first when missing)")
     parser.add_argument("--quick", action="store_true", help="the same atlas (it takes seconds already)")
+    parser.add_argument("--solids-fraction", type=float, nargs="+", metavar="PHI", default=[],
+                        help="each law's uniform-bed Umf also at these packings (the beds' recorded axes): e.g. "
+                             "the packing a simulated bed defluidized at, where the solver meets its closure")
     args = parser.parse_args(argv)
+    if any(not 0.0 < phi < 0.74 for phi in args.solids_fraction):
+        parser.error(f"--solids-fraction {args.solids_fraction}: each between 0 and 0.74 (a packing of spheres "
+                     "or rods)")
     if args.measure_beds:
         settled_beds(["ar1", "ar4"], "closure_atlas")
     wall0, cpu0 = time.perf_counter(), time.process_time()
@@ -251,11 +257,15 @@ def main(argv=None) -> int:
     with warnings.catch_warnings():  # the root finders try far outside the ranges: judged at the answers
         warnings.simplefilter("ignore", RuntimeWarning)
         umf = bed_umf(beds)
+        at_packing = {f"{phi:g}": {name: {bed: entry["laws"][name] for bed, entry in
+                                          bed_umf({k: {**b, "solids_fraction": phi} for k, b in beds.items()}).items()}
+                                   for name in drag_laws()} for phi in args.solids_fraction}
         settling = hindered()
     result = {"beds": {k: {kk: v for kk, v in b.items() if kk != "laws"} for k, b in umf.items()},
               "richardson_zaki": settling["richardson_zaki"],
               "laws": {name: {"umf": {bed: umf[bed]["laws"][name] for bed in umf},
                               "hindered": settling["laws"][name]} for name in drag_laws()},
+              "umf_at_solids_fraction": at_packing,
               "outside_fitted_range": OUTSIDE,
               "wall_seconds": None, "cpu_seconds": None}
     out = Path(args.out)
@@ -269,6 +279,10 @@ def main(argv=None) -> int:
         row = entry["hindered"]["ga_e_1296"]["2"]
         print(f"{name:20s} Umf {', '.join(cells)}; Re(phi 0.2, l/d 2, Ga_e 1296) "
               + (f"{row['0.2']:.2f}" if row else "-"))
+    for phi, laws in at_packing.items():
+        print(f"at solids fraction {phi}: " + "; ".join(
+            f"{name} " + ", ".join(f"{bed} {v:.3f}" if v is not None else f"{bed} -" for bed, v in by_bed.items())
+            for name, by_bed in laws.items()))
     if args.json:
         print(json.dumps(result))
     return 0
