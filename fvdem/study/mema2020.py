@@ -204,13 +204,15 @@ def _compare(rows, faster, slower, velocities, claim):
     then a lower bound, with no upper one). At a velocity, ``faster`` is faster where its mean (known) lies
     below ``slower``'s lower bound, not faster where its lower bound reaches ``slower``'s mean; a difference
     within ``CLOSE`` with one replica is too noisy to tell. One velocity where it is not faster decides."""
-    a, b = _t95(rows, faster), _t95(rows, slower)
+    a, b = _mean_t95(rows, faster), _mean_t95(rows, slower)
     common = sorted(v for v in set(a) & set(b) if velocities(v))
     if not common:
         return {"finding": claim, "verdict": "open", "why": f"no velocity where both {faster} and {slower} ran"}
     values, why, faster_at = {}, [], {}
     for v in common:
-        (low_a, mean_a, n_a), (low_b, mean_b, n_b) = (_t95_bounds(rows, f, v) for f in (faster, slower))
+        (low_a, unmixed_a), (low_b, unmixed_b) = a[v], b[v]
+        mean_a, mean_b = (None if unmixed_a else low_a), (None if unmixed_b else low_b)
+        n_a, n_b = len(_t95(rows, faster)[v]), len(_t95(rows, slower)[v])
         values[f"{v:g}"] = {f: (mean if mean is not None else f"> {low:.3g} ({_unmixed(rows, f, v)})")
                             for f, low, mean in ((faster, low_a, mean_a), (slower, low_b, mean_b))}
         if mean_a is not None and mean_a < low_b:
@@ -239,15 +241,6 @@ def _compare(rows, faster, slower, velocities, claim):
     if why:
         return {"finding": claim, "verdict": "open", "why": "; ".join(why), "values": values, "rule": rule}
     return {"finding": claim, "verdict": "holds", "values": values, "rule": rule}
-
-
-def _t95_bounds(rows, family, v):
-    """A family's replicas at ``v``: (lower bound of the mean t95, the mean t95 or None where a run has not
-    mixed by its end, how many replicas); an unmixed run counts at its end (its simulated seconds)."""
-    t95 = _t95(rows, family)[v]
-    ends = [e or 0.0 for e in _by_velocity(rows, family, "simulated_seconds")[v]]
-    low = sum(t if t is not None else end for t, end in zip(t95, ends)) / len(t95)
-    return low, (low if None not in t95 else None), len(t95)
 
 
 def _unmixed(rows, family, v) -> str:
