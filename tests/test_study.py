@@ -654,6 +654,9 @@ def test_a_slurm_cluster_table_submits_one_job_per_worker_with_the_runs_threads_
             # the job exports its end and the margin; its worker retires halfway through the margin
             assert "export FVDEM_JOB_END=$(( $(date +%s) + 7200 ))" in script and "export FVDEM_STOP_MARGIN=300" in script
             assert "--lifetime 7050s" in script
+            # Dask's monitoring quieted on the node's worker (QUIET_DASK)
+            assert "export DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False" in script
+            assert "export DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL=1s" in script
     finally:
         close_client(client)
     with pytest.raises(CaseError) as err:
@@ -1309,3 +1312,23 @@ def test_a_changed_study_is_refused_then_superseded_in_its_folder_and_its_archiv
             != (dest / "superseded" / first / "timeseries.csv").read_text())
     archive(out, dest)  # again: the archive holds the new definition, nothing more moves
     assert sorted(p.name for p in (dest / "superseded").iterdir()) == sorted([first, second])
+
+
+def test_a_local_study_cluster_runs_with_dasks_monitoring_quieted_unless_the_user_set_it():
+    """QUIET_DASK: the LocalCluster's workers have their statistical profiler off and the scheduler ticks every
+    second (Dask's defaults, 10 ms and 20 ms, cost a study a tenth of a core); a value the user's Dask
+    configuration sets is kept."""
+    import dask
+
+    from fvdem.study import close_client, make_client
+    from fvdem.study.cluster import QUIET_DASK, quiet_dask
+    assert quiet_dask() == QUIET_DASK  # the suite runs on Dask's defaults
+    client, _ = make_client(None, None, 1, 1)
+    try:
+        assert set(client.run(lambda: dask.config.get("distributed.worker.profile.enabled")).values()) == {False}
+        assert client.cluster.scheduler.periodic_callbacks["tick"].callback_time == 1000.0
+    finally:
+        close_client(client)
+    assert dask.config.get("distributed.worker.profile.enabled") is True  # the process's own config untouched
+    with dask.config.set({"distributed.admin.tick.interval": "50ms"}):
+        assert quiet_dask() == {k: v for k, v in QUIET_DASK.items() if k != "distributed.admin.tick.interval"}

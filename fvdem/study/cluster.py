@@ -137,6 +137,34 @@ def load_cluster(path) -> dict:
     return cluster
 
 
+# Dask's own monitoring at its defaults costs a study of CPU-bound runs about a tenth of a core (the event loop's
+# tick every 20 ms, the system monitor every 0.5 s, each worker's statistical profiler sampling its running
+# task every 10 ms; a GIL monitor where gilknocker is installed): measured with two workers holding sleeping
+# tasks, 4.8-6.2 % of a core in the client's process and 3.6-5.0 % in each worker, against 1.5-1.7 % and
+# 0.7 % with these (``tools/bench_study_overhead.py``, docs/benchmarks.md). The dashboard stays; its
+# profile page and system plots go quiet. Where the user's Dask configuration (YAML, DASK_* variable) sets one
+# of these keys to other than Dask's default, the user's value is kept (``quiet_dask``).
+QUIET_DASK = {"distributed.admin.tick.interval": "1s", "distributed.admin.system-monitor.interval": "5s",
+              "distributed.admin.system-monitor.gil.enabled": False, "distributed.worker.profile.enabled": False}
+
+
+def quiet_dask() -> dict:
+    """The settings of ``QUIET_DASK`` whose keys the Dask configuration in force leaves at Dask's defaults."""
+    import dask
+    defaults = dask.config.merge(*dask.config.defaults)
+    quiet = {}
+    for key, value in QUIET_DASK.items():
+        default = dask.config.get(key, default=None, config=defaults)
+        if default is not None and dask.config.get(key, default=None) == default:
+            quiet[key] = value
+    return quiet
+
+
+def _env_name(key: str) -> str:
+    """A Dask configuration key as its ``DASK_*`` environment variable (``a.b-c.d`` -> ``DASK_A__B_C__D``)."""
+    return "DASK_" + "__".join(part.replace("-", "_").upper() for part in key.split("."))
+
+
 def worker_count(cluster: dict | None, workers: int | None, threads: int) -> int:
     """How many workers (LocalCluster processes, or dask-jobqueue jobs at most) a client made by ``make_client``
     has: ``--workers``, else the ``[cluster]`` table's ``workers``, else the cores over the run's threads."""
@@ -147,6 +175,7 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
     """A Dask client: on ``scheduler``, on a dask-jobqueue ``cluster`` table (a study's ``[cluster]``), or on
     a LocalCluster of ``workers`` processes (default: cores / threads). Returns ``(client, description)``."""
     try:
+        import dask
         from distributed import Client, LocalCluster
     except ImportError:  # pragma: no cover - a dependency
         raise CaseError(["fvdem study needs Dask distributed: pip install 'dask[distributed]'"]) from None
@@ -168,8 +197,9 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
         if previous is not None:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=":0",
-                                 **options)  # any free port: two studies side by side do not clash
+            with dask.config.set(quiet_dask()):  # the scheduler reads it now, each nanny keeps a copy for its worker
+                local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                     **options)  # any free port: two studies side by side do not clash
         finally:
             if previous is not None:
                 signal.signal(signal.SIGINT, previous)
@@ -182,7 +212,9 @@ def make_client(cluster: dict | None, scheduler: str | None, workers: int | None
         raise CaseError([f"cluster.kind = {kind!r}: needs dask-jobqueue (pip install dask-jobqueue)"]) from None
     cluster_class = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster", "lsf": "LSFCluster"}[kind]
     try:
-        jobs = getattr(dask_jobqueue, cluster_class)(**jobqueue_options(kind, options, threads))
+        job_options = jobqueue_options(kind, options, threads)  # before the scheduler's settings below
+        with dask.config.set(quiet_dask()):  # its scheduler, in this process
+            jobs = getattr(dask_jobqueue, cluster_class)(**job_options)
     except (TypeError, ValueError) as exc:  # an option dask-jobqueue does not know
         raise CaseError([f"cluster: {exc} (the [cluster] table's keys are dask_jobqueue.{cluster_class}'s options)"]) from None
     # jobs while runs wait, none once they are done: a job that ends (its walltime, its worker's lifetime)
@@ -200,6 +232,9 @@ def jobqueue_options(kind: str, options: dict, threads: int) -> dict:
     ``job_cpu``, LSF ``ncpus``; on PBS and SGE book them with ``resource_spec``). The table has been
     checked (``check_cluster``: ``memory`` required, keys known to dask-jobqueue's classes)."""
     options = dict(options)
+    # the workers start on the nodes from the job script: Dask's monitoring is quieted there by its variables
+    options["job_script_prologue"] = [*options.get("job_script_prologue", []),
+                                      *(f"export {_env_name(k)}={v}" for k, v in quiet_dask().items())]
     margin = options.pop("stop_before_walltime", None)
     options.setdefault("cores", 1)
     options.setdefault("processes", 1)
