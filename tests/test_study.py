@@ -1314,7 +1314,7 @@ def test_a_changed_study_is_refused_then_superseded_in_its_folder_and_its_archiv
     assert sorted(p.name for p in (dest / "superseded").iterdir()) == sorted([first, second])
 
 
-def test_a_local_study_cluster_runs_with_dasks_monitoring_quieted_unless_the_user_set_it():
+def test_a_local_study_cluster_runs_with_dasks_monitoring_quieted_unless_the_user_set_it(monkeypatch):
     """QUIET_DASK: the LocalCluster's workers have their statistical profiler off and the scheduler ticks every
     second (Dask's defaults, 10 ms and 20 ms, cost a study a tenth of a core); a value the user's Dask
     configuration sets is kept."""
@@ -1332,3 +1332,6 @@ def test_a_local_study_cluster_runs_with_dasks_monitoring_quieted_unless_the_use
     assert dask.config.get("distributed.worker.profile.enabled") is True  # the process's own config untouched
     with dask.config.set({"distributed.admin.tick.interval": "50ms"}):
         assert quiet_dask() == {k: v for k, v in QUIET_DASK.items() if k != "distributed.admin.tick.interval"}
+    # a key set by its DASK_* variable is kept, even at Dask's default value
+    monkeypatch.setenv("DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED", "True")
+    assert "distributed.worker.profile.enabled" not in quiet_dask()

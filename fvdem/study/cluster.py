@@ -149,13 +149,15 @@ QUIET_DASK = {"distributed.admin.tick.interval": "1s", "distributed.admin.system
 
 
 def quiet_dask() -> dict:
-    """The settings of ``QUIET_DASK`` whose keys the Dask configuration in force leaves at Dask's defaults."""
+    """The settings of ``QUIET_DASK`` whose keys the Dask configuration in force leaves at Dask's defaults and
+    no ``DASK_*`` environment variable sets (``DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=True`` keeps the
+    workers' profiler, even though True is Dask's default)."""
     import dask
     defaults = dask.config.merge(*dask.config.defaults)
     quiet = {}
     for key, value in QUIET_DASK.items():
         default = dask.config.get(key, default=None, config=defaults)
-        if default is not None and dask.config.get(key, default=None) == default:
+        if default is not None and dask.config.get(key, default=None) == default and _env_name(key) not in os.environ:
             quiet[key] = value
     return quiet
 
