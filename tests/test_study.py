@@ -295,6 +295,18 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
                                                                               simulated_seconds=13.0)])[0]
     assert unknown["verdict"] == "open" and "only known to exceed 15.5 s, against 16.9 s" in unknown["why"]
     assert "run it longer" in unknown["why"]
+    # SP against MP "only a slight effect": mean t95s within 20 % of MP's; an unmixed family's mean a lower
+    # bound, which decides once the gap it leaves reaches 20 % (SP mixed at 4.26 s, MP not by 20 s: > 0.79)
+    claim = "single- against multi-particle closures: only a slight effect on AR-4 mixing"
+
+    def slight(rows):
+        return next(f for f in check_findings(rows) if f["finding"] == claim)
+    apart = slight([dict(row("ar4_sp", 1.6, 4.26), simulated_seconds=6.26), unmixed("ar4_mp", 1.6, 20.0, 0.946)])
+    assert apart["verdict"] == "does not hold" and apart["values"] == {"1.6": "> 0.787 (MP not mixed by its end)"}
+    near = slight([row("ar4_sp", 2.0, 4.0), row("ar4_mp", 2.0, 4.5), row("ar4_sp", 2.9, 3.0), row("ar4_mp", 2.9, 2.8)])
+    assert near["verdict"] == "holds" and near["values"]["2"] == pytest.approx(1 / 9)
+    short = slight([unmixed("ar4_sp", 2.0, 6.0, 0.9), row("ar4_mp", 2.0, 5.5)])  # SP > 6: the gap > 9 %, unknown
+    assert short["verdict"] == "open" and "at 2 Umf" in short["why"]
     # one velocity where it is not faster decides, whatever another leaves open
     mixed_up = check_findings([row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 4.0), row("ar1", 1.7, 3.0),
                                row("ar4_mp", 1.7, 2.9)])[0]
