@@ -153,6 +153,7 @@ def quiet_dask() -> dict:
     no ``DASK_*`` environment variable sets (``DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=True`` keeps the
     workers' profiler, even though True is Dask's default)."""
     import dask
+    import distributed  # noqa: F401  (registers its configuration's defaults, which the keys below are)
     defaults = dask.config.merge(*dask.config.defaults)
     quiet = {}
     for key, value in QUIET_DASK.items():
