@@ -209,10 +209,11 @@ def _compare(rows, faster, slower, velocities, claim):
     if not common:
         return {"finding": claim, "verdict": "open", "why": f"no velocity where both {faster} and {slower} ran"}
     values, why, faster_at = {}, [], {}
+    replicas = {f: _t95(rows, f) for f in (faster, slower)}  # read once, not per velocity
     for v in common:
         (low_a, unmixed_a), (low_b, unmixed_b) = a[v], b[v]
         mean_a, mean_b = (None if unmixed_a else low_a), (None if unmixed_b else low_b)
-        n_a, n_b = len(_t95(rows, faster)[v]), len(_t95(rows, slower)[v])
+        n_a, n_b = len(replicas[faster][v]), len(replicas[slower][v])
         values[f"{v:g}"] = {f: (mean if mean is not None else f"> {low:.3g} ({_unmixed(rows, f, v)})")
                             for f, low, mean in ((faster, low_a, mean_a), (slower, low_b, mean_b))}
         if mean_a is not None and mean_a < low_b:
