@@ -128,9 +128,23 @@ def cmd_study(args) -> int:
     if args.stop:
         if not target.is_dir() or not (target / "study.toml").exists():
             return _fail(f"--stop: {target} is not a study folder (no study.toml)")
-        log_path = request_stop(target)
-        print(f"wrote {log_path}: the study's running runs checkpoint at their next chunk and stop; "
-              "run the same fvdem study command to continue")
+        from .io.locks import describe_holder, holder
+        running = holder(target)
+        log_path = request_stop(target)  # also where the lock cannot be seen: the next start removes it
+        if running is None:
+            print(f"wrote {log_path}, but no fvdem study holds {target}'s lock (none runs there, or one runs where "
+                  "its lock cannot be seen: an older fvdem without folder locks, a file system without locks); a "
+                  "study running there stops, the next one started removes the file")
+            return 0
+        print(f"wrote {log_path}: {describe_holder(running)} stops; its running runs checkpoint at their next "
+              "chunk; run the same fvdem study command to continue")
+        return 0
+    if args.status:
+        if not target.is_dir() or not (target / "study.json").exists():
+            return _fail(f"--status: {target} is not a study folder or an archive of one (no study.json)")
+        from .study.status import format_status, study_status
+        status = study_status(target)
+        print(json.dumps(status) if args.json else format_status(status))
         return 0
     if args.archive:
         if not target.is_dir() or not (target / "study.json").exists():
@@ -174,19 +188,21 @@ def cmd_study(args) -> int:
         from .study import load_cluster
         study = replace(study, cluster=load_cluster(args.cluster))
     log = (lambda line: print(line, file=sys.stderr, flush=True))
-    code = _changed_folders(study, args.out, args.supersede, log)
-    if code:
-        return code
-    if args.restore:
-        code = _restore(study, args.restore, log)
+    from .study.runner import study_lock
+    with study_lock(study, args.out):  # a study already running in --out is refused before anything moves
+        code = _changed_folders(study, args.out, args.supersede, log)
         if code:
             return code
-    durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
-    log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {durations} s into {args.out}")
-    result = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers,
-                       threads=args.threads_per_worker, log=log)
-    for path in report(args.out):
-        log(f"report: {path}")
+        if args.restore:
+            code = _restore(study, args.restore, log)
+            if code:
+                return code
+        durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
+        log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {durations} s into {args.out}")
+        result = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers,
+                           threads=args.threads_per_worker, log=log)
+        for path in report(args.out):
+            log(f"report: {path}")
     failed = [r for r in result["runs"] if r["status"] == "failed"]
     for r in failed:
         log(f"failed: {r['name']}: {r['error']}")
@@ -425,6 +441,10 @@ def make_parser() -> argparse.ArgumentParser:
                             "sets (a changed setting) to --out's superseded/ and run them again; without it such "
                             "folders are refused before anything runs, each named with the keys that differ")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
+    study.add_argument("--status", action="store_true",
+                       help="where a study folder (or an archive of one) stands, read without writing: whether a "
+                            "study runs there now, each run's state, simulated seconds, t95 and mixing entropy, "
+                            "CPU seconds per simulated second and memory per family, and the core-hours left")
     study.add_argument("--stop", action="store_true",
                        help="ask the study running in this folder to stop (its runs checkpoint first)")
     study.add_argument("--json", action="store_true", help="the result as one JSON line")

@@ -7,6 +7,7 @@ Writers only read the state, so a run resumed from a checkpoint continues bit-fo
 """
 from __future__ import annotations
 
+import contextlib
 import time as _time
 from dataclasses import asdict
 from pathlib import Path
@@ -14,6 +15,7 @@ from pathlib import Path
 from .case import Case, to_toml
 from .errors import SimulationError
 from .io.checkpoint import load_checkpoint
+from .io.locks import FolderLock
 from .io.run_folder import (CHECKPOINT, OutputError, RunState, Schedule, check_resumable, prepare_output,
                             write_checkpoint, write_final, write_snapshot)
 from .io.progress import advance_bar, progress_bar
@@ -46,12 +48,28 @@ class Simulation:
         self._stop_when = stop_file if callable(stop_file) else (Path(stop_file).exists if stop_file else None)
         self.threads = set_threads(case.run.threads if threads is None else threads)
         self.progress = case.output.progress if progress is None else progress
-        self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
-        if resume and self.out is not None:
-            check_resumable(case, self.out)
-        self.log = RunLog(self.out)  # run.log: provenance, progress, warnings (nothing without a folder)
-        with self.log.warnings_captured():
-            self._build(case, resume)
+        # one writer at a time (``fvdem.io.locks``): held while this object writes (here, and in each run())
+        self._lock = FolderLock(out_dir, "run", {"case": case.name}) if out_dir is not None else None
+        with self._writing():
+            self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
+            if resume and self.out is not None:
+                check_resumable(case, self.out)
+            self.log = RunLog(self.out)  # run.log: provenance, progress, warnings (nothing without a folder)
+            with self.log.warnings_captured():
+                self._build(case, resume)
+
+    @contextlib.contextmanager
+    def _writing(self):
+        """The run folder's lock for the block (none without a folder): a second process writing the same
+        folder is refused (``FolderInUse``, an ``OutputError``) before it touches anything."""
+        if self._lock is None:
+            yield
+            return
+        self._lock.acquire()
+        try:
+            yield
+        finally:
+            self._lock.release()
 
     def _build(self, case: Case, resume: bool) -> None:
         """The scene, the model (from the checkpoint when resuming), the schedules and the writers."""
@@ -99,7 +117,12 @@ class Simulation:
 
     def run(self, duration: float | None = None) -> dict:
         """Advance ``duration`` [s] (default: to ``time.end``), or until the scene ends the run (settled, mixed)
-        or it is stopped. Returns the summary dictionary (also written as summary.json with an output folder)."""
+        or it is stopped. Returns the summary dictionary (also written as summary.json with an output folder).
+        Another process writing the output folder meanwhile is refused (``FolderInUse``)."""
+        with self._writing():
+            return self._run(duration)
+
+    def _run(self, duration: float | None) -> dict:
         end_time = self.case.time.end if duration is None else self.time + duration
         if self.run_state.ended:  # ended before (e.g. resumed): still, under this case's criteria?
             self.run_state.ended = self.scene.ends(self.model, self.diagnostics(), self.run_state.histories)

@@ -5,6 +5,8 @@
 # change the code under a running campaign: the workers import it afresh whenever they restart):
 #   git clone <repo> ~/fvdem-code && cd ~/fvdem-code        # once; later: git -C ~/fvdem-code pull
 #   setsid nohup studies/campaign.sh > ~/fvdem-runs/campaign.log 2>&1 < /dev/null &
+# (started twice, the second is refused: the study holds its folder's lock); where it stands, from anywhere:
+#   .venv/bin/fvdem study ~/fvdem-runs/mema2020_stage2 --status
 # and before the session ends archive what finished into the repository (from the work tree):
 #   .venv/bin/fvdem study ~/fvdem-runs/mema2020_stage2 --archive docs/data/mema2020
 # Study folders live outside the work tree (~/fvdem-runs), so a new work tree loses nothing; finished

@@ -19,6 +19,7 @@ from ..case import Case, to_toml
 from ..errors import OutputError  # noqa: F401  (re-exported: fvdem.io.run_folder.OutputError)
 from .checkpoint import save_checkpoint
 from .vtk import write_gas_vtu, write_particles_vtu, write_pvd
+from .locks import LOCK_FILE
 
 CHECKPOINT = "checkpoint.npz"
 FINAL_STATE = "final_state.npz"
@@ -63,18 +64,21 @@ class RunState:
 
 
 def prepare_output(out_dir, overwrite: bool = False, resume: bool = False) -> Path:
-    """Create the output folder; never replace results unless ``overwrite``."""
+    """Create the output folder; never replace results unless ``overwrite`` (the folder's lock file,
+    ``fvdem.io.locks``, is not a result: it stays)."""
     out = Path(out_dir)
     try:
         if resume:
             if not (out / CHECKPOINT).exists():
                 raise OutputError(f"--resume: {out} holds no {CHECKPOINT} to resume from")
             return out
-        if out.exists() and any(out.iterdir()):
+        held = [p for p in out.iterdir() if p.name != LOCK_FILE] if out.exists() else []
+        if held:
             if not overwrite:
                 raise OutputError(f"output folder {out} exists and is not empty; pass --overwrite to replace it "
                                   "or --resume to continue its run")
-            shutil.rmtree(out)
+            for path in held:  # the folder's lock (its writer's, this process's) stays
+                shutil.rmtree(path) if path.is_dir() and not path.is_symlink() else path.unlink()
         out.mkdir(parents=True, exist_ok=True)
         return out
     except OSError as exc:

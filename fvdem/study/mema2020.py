@@ -591,4 +591,4 @@ register_report(StudyReport(
                       "rms_speed", "max_overlap_over_diameter", "gas_max_speed"),
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",
                       "bed_height", "mixing_cells"),
-    archive_extra=_archive_extra))
+    archive_extra=_archive_extra, watch=("mixing_entropy",)))

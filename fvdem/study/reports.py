@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from ..io.locks import LOCK_FILE
 from .tasks import ENDED, FAILED, IN_PROGRESS, _simulated_so_far
 
 
@@ -37,6 +38,7 @@ class StudyReport:
     archived_columns: tuple = ()  # time-series columns an archive keeps besides ``time``
     archived_summary: tuple = ()  # summary keys an archive keeps besides ``ARCHIVED_SUMMARY``
     archive_extra: Callable[[Path, Path], None] | None = None  # (run folder, its archive folder): extra files
+    watch: tuple = ()  # time-series columns whose last value ``fvdem study --status`` shows per run
 
 
 REPORTS: dict[str, StudyReport] = {}
@@ -264,7 +266,8 @@ def restore(study, source) -> list:
         if run.bed and bed != run.bed:  # its bed, not only its settings: the replica's own bed
             changed = "; ".join(x for x in (changed, f"its bed: {bed!r} -> {run.bed!r}") if x)
         folder = Path(run.folder)
-        if folder.exists() and any(folder.iterdir()):  # the study's own folder: its run resumes or is skipped
+        if folder.exists() and any(p.name != LOCK_FILE for p in folder.iterdir()):
+            # the study's own folder (more than a lock file): its run resumes or is skipped
             outcomes.append((run.name, "exists"))
         elif changed:
             outcomes.append((run.name, f"case differs: {changed}"))

@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 from ..case import CaseError, load_case
+from ..io.locks import FolderLock
 from .cluster import close_client, make_client, worker_count
 from .reports import report_for
 from .sweep import BedSpec, RunSpec, Study
@@ -218,9 +219,20 @@ def _retire(client, address: str, seconds: float = 10.0) -> bool:
 def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print, poll: float = 30.0) -> dict:
     """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``).
     SIGINT/SIGTERM (main thread) or ``request_stop(out)`` stop it with every running run checkpointed.
-    Progress: the run folders are read every ``poll`` seconds (``_StudyProgress``)."""
+    Progress: the run folders are read every ``poll`` seconds (``_StudyProgress``). One study at a time runs
+    in ``out``: a second is refused (``FolderInUse``, naming the first) before it touches anything."""
+    with study_lock(study, out):
+        return _run_study(study, Path(out), scheduler, workers, threads, log, poll)
+
+
+def study_lock(study: Study, out) -> FolderLock:
+    """The lock of the study folder ``out`` (``fvdem.io.locks``), held while a study runs there; taken again by
+    the process that holds it (the command line takes it before it moves superseded folders)."""
+    return FolderLock(out, "study", {"study": study.name, "file": str(study.path)})
+
+
+def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll) -> dict:
     from distributed import wait
-    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.toml").write_text(Path(study.path).read_text())
     (out / STOP_FILE).unlink(missing_ok=True)  # a stop request belongs to the invocation it stopped

@@ -1,0 +1,159 @@
+"""Where a study stands (``fvdem study OUT --status``), read from its folder alone and without writing anything:
+whether a study runs there now (its folder's lock: who, where, since when), each run's state (ended, running
+now, in progress from a checkpoint, not started, failed), the simulated seconds it holds against its duration
+and its report's values (seed 000's: t95, the mixing entropy it reached), the CPU seconds per simulated second
+and peak memory each family has cost so far, and what is left: simulated seconds and core-hours at those
+rates, the hours that makes at the runs running now. Works on a study folder while its study runs (a few
+file reads per run), on a stopped one and on an archive of one (``fvdem study OUT --archive DEST``).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..io.locks import describe_holder, holder
+from .reports import _series, report_for
+from .tasks import FAILED, _summary
+
+# a run's state in the status: at its end; a process writing it now; a checkpoint (or an archive's partial
+# results) it resumes from; nothing yet; its last attempt failed (its cause in study.json)
+STATES = ("ended", "running", "in progress", "not started", "failed")
+
+
+def study_status(out) -> dict:
+    """The status of the study folder ``out`` (see the module): ``{"study", "folder", "running" (the lock's
+    record of the study process, or None), "scheduler", "runs": [{"name", "family", "point", "replica",
+    "state", "simulated_seconds", "duration", "left", <the report's values>, "cpu_per_simulated_second",
+    "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second", "runs_measured",
+    "peak_memory_mb", "left_simulated_seconds", "left_core_hours"}}, "left_simulated_seconds",
+    "left_core_hours", "unmeasured" (families left without a measured rate), "hours_at_running_now"}``."""
+    out = Path(out)
+    index = json.loads((out / "study.json").read_text())
+    chosen = report_for(index.get("report"))
+    runs = [_run_status(out, r, chosen) for r in index["runs"]]
+    families = {}
+    for row in runs:
+        family = families.setdefault(row["family"], {"cpu_seconds": 0.0, "simulated": 0.0, "runs_measured": 0,
+                                                     "peak_memory_mb": None, "left_simulated_seconds": 0.0})
+        measured = row.pop("_cpu_measured")
+        if measured is not None:
+            family["cpu_seconds"] += measured[0]
+            family["simulated"] += measured[1]
+            family["runs_measured"] += 1
+        if row.get("peak_memory_mb") is not None:
+            family["peak_memory_mb"] = max(family["peak_memory_mb"] or 0.0, row["peak_memory_mb"])
+        family["left_simulated_seconds"] += row["left"]
+    slowest = max((f["cpu_seconds"] / f["simulated"] for f in families.values() if f["simulated"] > 0), default=None)
+    unmeasured = []
+    for name, family in families.items():
+        rate = family["cpu_seconds"] / family["simulated"] if family["simulated"] > 0 else None
+        family["cpu_per_simulated_second"] = rate
+        if rate is None and family["left_simulated_seconds"] > 0:
+            unmeasured.append(name)
+        used = rate if rate is not None else slowest
+        family["left_core_hours"] = None if used is None else family["left_simulated_seconds"] * used / 3600.0
+        del family["cpu_seconds"], family["simulated"]
+    counts = {state: sum(row["state"] == state for row in runs) for state in STATES}
+    left_hours = (None if any(f["left_core_hours"] is None for f in families.values())
+                  else sum(f["left_core_hours"] for f in families.values()))
+    return {"study": index.get("study"), "folder": str(out), "running": holder(out),
+            "scheduler": index.get("scheduler"), "runs": runs, "counts": counts, "families": families,
+            "left_simulated_seconds": sum(row["left"] for row in runs), "left_core_hours": left_hours,
+            "unmeasured": unmeasured,
+            "hours_at_running_now": (left_hours / counts["running"] if left_hours is not None and counts["running"]
+                                     else None)}
+
+
+def _run_status(out: Path, r: dict, chosen) -> dict:
+    """One run's row (``study_status``), with the CPU seconds and simulated seconds its summary measured under
+    ``_cpu_measured`` (None without; taken out by the caller)."""
+    folder = Path(r["folder"]) if Path(r["folder"]).is_absolute() else out / r["folder"]
+    summary = _summary(folder) or {}
+    series = _series(folder) if (folder / "timeseries.csv").exists() else None
+    held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
+    duration = r.get("duration")
+    at_end = bool(summary) and not summary.get("stopped_early") and (
+        bool(summary.get("ended")) or duration is None
+        or float(summary.get("simulated_time") or 0.0) >= duration * (1 - 1e-9))
+    writer = holder(folder)
+    if writer is not None:
+        state = "running"
+    elif at_end and held <= float(summary.get("simulated_time") or 0.0) + 1e-9:
+        state = "ended"
+    elif r.get("status") == FAILED:
+        state = "failed"
+    elif held > 0:
+        state = "in progress"
+    else:
+        state = "not started"
+    if state == "ended":
+        values = chosen.run_values(summary) if chosen.run_values else {}
+    elif series is not None and chosen.live and chosen.run_values:
+        values = chosen.run_values(chosen.live(series))
+    else:
+        values = {}
+    watched = {c: float(series[c][-1]) for c in chosen.watch if series is not None and c in series}
+    cpu, measured = summary.get("cpu_seconds"), float(summary.get("simulated_time") or 0.0)
+    row = {"name": r["name"], "family": r["family"], "point": r.get("point", {}), "replica": r.get("replica"),
+           "state": state, "simulated_seconds": held, "duration": duration,
+           "left": 0.0 if state == "ended" or duration is None else max(0.0, duration - held),
+           **values, **watched,
+           "cpu_per_simulated_second": cpu / measured if cpu and measured > 0 else None,
+           "peak_memory_mb": summary.get("peak_memory_mb"),
+           **({"error": r.get("error")} if state == "failed" else {}),
+           **({"writer": writer} if writer else {}),
+           "_cpu_measured": (float(cpu), measured) if cpu and measured > 0 else None}
+    return row
+
+
+def format_status(status: dict) -> str:
+    """``study_status`` as a terminal table and three lines of totals."""
+    chosen_columns = _value_columns(status["runs"])
+    lines = [f"study {status['study']} in {status['folder']}: "
+             + (f"running: {describe_holder(status['running'])}" if status["running"] is not None
+                else "not running (no fvdem study holds its folder)")]
+    if status.get("scheduler"):
+        lines.append(f"  last scheduler: {status['scheduler']}")
+    width = max([len(r["name"]) for r in status["runs"]] + [3])
+    header = (f"{'run':<{width}}  {'state':<11}  {'simulated s':>13}  "
+              + "".join(f"{c:>15}  " for c in chosen_columns) + f"{'CPU s/sim s':>11}  {'peak MB':>7}")
+    lines += ["", header]
+    for r in status["runs"]:
+        done = f"{r['simulated_seconds']:.4g} / {r['duration']:g}" if r["duration"] is not None \
+            else f"{r['simulated_seconds']:.4g}"
+        values = "".join(f"{_cell(r.get(c)):>15}  " for c in chosen_columns)
+        lines.append(f"{r['name']:<{width}}  {r['state']:<11}  {done:>13}  {values}"
+                     f"{_cell(r['cpu_per_simulated_second'], '.0f'):>11}  {_cell(r['peak_memory_mb'], '.0f'):>7}")
+    counts = status["counts"]
+    total = sum(r["duration"] or r["simulated_seconds"] for r in status["runs"])
+    lines += ["", ", ".join(f"{n} {state}" for state, n in counts.items() if n) + f" of {len(status['runs'])} runs; "
+              f"{total - status['left_simulated_seconds']:.4g} of {total:.4g} simulated s done, "
+              f"{status['left_simulated_seconds']:.4g} left ("
+              + ", ".join(f"{name} {f['left_simulated_seconds']:.4g}" for name, f in status["families"].items()
+                          if f["left_simulated_seconds"] > 0) + ")"]
+    lines.append("CPU s per simulated s so far: " + "; ".join(
+        f"{name} " + (f"{f['cpu_per_simulated_second']:.0f} ({f['runs_measured']} run(s)), peak "
+                      f"{f['peak_memory_mb']:.0f} MB" if f["cpu_per_simulated_second"] is not None else "not measured")
+        for name, f in status["families"].items()))
+    if status["left_core_hours"] is not None and status["left_simulated_seconds"] > 0:
+        line = (f"left: at most {status['left_core_hours']:.1f} core-hours at these rates (runs that end early, "
+                "mixed or settled, take less)")
+        if status["unmeasured"]:
+            line += f"; {', '.join(status['unmeasured'])} at the slowest family's rate (none measured yet)"
+        if status["hours_at_running_now"] is not None:
+            line += f"; about {status['hours_at_running_now']:.1f} h at the {counts['running']} run(s) running now"
+        lines.append(line)
+    elif status["left_simulated_seconds"] > 0:
+        lines.append("left: no run has a measured rate yet")
+    return "\n".join(lines)
+
+
+def _value_columns(runs: list) -> list:
+    """The report's value columns the runs have (in the first run's order)."""
+    skip = {"name", "family", "point", "replica", "state", "simulated_seconds", "duration", "left",
+            "cpu_per_simulated_second", "peak_memory_mb", "error", "writer"}
+    return list(dict.fromkeys(k for r in runs for k in r if k not in skip))
+
+
+def _cell(value, spec: str = ".3g") -> str:
+    return "-" if value is None else format(value, spec) if isinstance(value, (int, float)) else str(value)

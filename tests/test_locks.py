@@ -1,0 +1,175 @@
+"""One writer per folder (``fvdem.io.locks``): a run folder or a study folder another process is writing is
+refused before anything is touched, with who holds it; a lock dies with its process; ``fvdem study --status``
+reads where a study stands without writing."""
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fvdem.cli import main
+from fvdem.io.locks import LOCK_FILE, FolderInUse, FolderLock, holder
+from fvdem.io.run_folder import prepare_output
+
+ROOT = Path(__file__).resolve().parents[1]
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="no advisory locks on Windows")
+
+
+def _hold(folder: Path, kind: str = "run"):
+    """Another process holding ``folder``'s lock (as ``fvdem study`` or a run would), until it is killed."""
+    code = ("import sys, time; from fvdem.io.locks import FolderLock; "
+            f"lock = FolderLock({str(folder)!r}, {kind!r}).acquire(); print('held', flush=True); time.sleep(120)")
+    process = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True, cwd=ROOT)
+    assert process.stdout.readline().strip() == "held"
+    return process
+
+
+def test_a_folder_held_by_another_process_is_refused_naming_it_and_freed_when_it_dies(tmp_path):
+    folder = tmp_path / "run"
+    process = _hold(folder)
+    try:
+        record = holder(folder)
+        assert record["pid"] == process.pid and record["kind"] == "run" and record["host"]
+        with pytest.raises(FolderInUse) as refused:
+            FolderLock(folder).acquire(retry=0.1)
+        message = str(refused.value)
+        assert f"process {process.pid}" in message and str(folder) in message and "-c" in message
+    finally:
+        process.send_signal(signal.SIGKILL)  # no clean-up of its own: the kernel releases the lock
+        process.wait()
+    assert holder(folder) is None
+    with FolderLock(folder) as lock:
+        assert lock.held and holder(folder)["pid"] == os.getpid()
+        with FolderLock(folder) as again:  # the holding process may take it again (nested)
+            assert again.held
+        assert holder(folder)["pid"] == os.getpid()  # still held by the outer one
+    assert holder(folder) is None and (folder / LOCK_FILE).exists()
+
+
+def test_a_folder_made_for_a_writer_that_wrote_nothing_is_not_left_behind(tmp_path):
+    with FolderLock(tmp_path / "new" / "run"):
+        pass
+    assert not (tmp_path / "new" / "run").exists()
+
+
+def test_an_output_folder_holding_only_its_lock_is_empty_and_overwrite_keeps_the_lock(tmp_path):
+    folder = tmp_path / "run"
+    with FolderLock(folder):
+        assert prepare_output(folder) == folder  # the lock file is not a result
+        (folder / "timeseries.csv").write_text("time\n0\n")
+        (folder / "sub").mkdir()
+        with pytest.raises(Exception, match="exists and is not empty"):
+            prepare_output(folder)
+        prepare_output(folder, overwrite=True)
+        assert [p.name for p in folder.iterdir()] == [LOCK_FILE] and holder(folder)["pid"] == os.getpid()
+
+
+def test_a_run_folder_another_process_writes_is_refused_before_anything_is_touched(tmp_path):
+    """``fvdem run`` into a folder a running run holds: exit 2 with the holder named; the folder's files are
+    the same bytes after (an --overwrite would have cleared them under the running run)."""
+    folder = tmp_path / "run"
+    folder.mkdir()
+    (folder / "timeseries.csv").write_text("time\n0.1\n")
+    process = _hold(folder)
+    try:
+        code = main(["run", str(ROOT / "cases" / "demo.toml"), "--out", str(folder), "--overwrite", "--no-progress",
+                     "--set", "particles.count=50", "--set", "time.end=0.002", "--set", "output.vtk=false"])
+        assert code == 2
+        assert (folder / "timeseries.csv").read_text() == "time\n0.1\n"
+        assert sorted(p.name for p in folder.iterdir()) == [LOCK_FILE, "timeseries.csv"]
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    # free again: the same command runs, and the run holds its folder while it runs only
+    assert main(["run", str(ROOT / "cases" / "demo.toml"), "--out", str(folder), "--overwrite", "--no-progress",
+                 "--set", "particles.count=50", "--set", "time.end=0.002", "--set", "output.vtk=false"]) == 0
+    assert holder(folder) is None and (folder / "summary.json").exists()
+
+
+def test_a_second_study_in_a_folder_a_study_runs_in_is_refused_and_moves_nothing(tmp_path, capsys):
+    out = tmp_path / "study"
+    out.mkdir()
+    (out / "STOP").write_text("stop requested\n")  # the running study's own stop request: not removed
+    process = _hold(out, "study")
+    try:
+        code = main(["study", str(ROOT / "studies" / "smoke.toml"), "--out", str(out), "--workers", "1"])
+        err = capsys.readouterr().err
+        assert code == 2 and f"study folder {out} is in use" in err and f"process {process.pid}" in err
+        assert f"fvdem study {out} --stop" in err and "Traceback" not in err
+        assert sorted(p.name for p in out.iterdir()) == [LOCK_FILE, "STOP"]
+        (out / "study.toml").write_text('name = "smoke"\n')
+        (out / "STOP").unlink()
+        assert main(["study", str(out), "--stop"]) == 0  # names the study it stops
+        assert f"process {process.pid}" in capsys.readouterr().out and (out / "STOP").exists()
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    (out / "STOP").unlink()
+    assert main(["study", str(out), "--stop"]) == 0  # nobody holds it: written anyway, and said so
+    assert "no fvdem study holds" in capsys.readouterr().out and (out / "STOP").exists()
+
+
+def _status_folder(tmp_path) -> Path:
+    """A study folder as a campaign leaves it: a run at its end (mixed), one in progress, one not started."""
+    out = tmp_path / "study"
+    rows = []
+    for name, family, held, summary in (
+            ("a_r1", "ar1", 5.0, {"simulated_time": 5.0, "ended": "mixed", "t95": 3.0, "cpu_seconds": 1000.0,
+                                  "peak_memory_mb": 400.0}),
+            ("b_r1", "ar4", 3.0, {"simulated_time": 2.0, "stopped_early": True, "cpu_seconds": 1200.0,
+                                  "peak_memory_mb": 350.0}),
+            ("b_r2", "ar4", 0.0, None)):
+        folder = out / "runs" / name
+        folder.mkdir(parents=True)
+        if held:
+            times = [0.01 * k for k in range(int(round(held / 0.01)) + 1)]
+            (folder / "timeseries.csv").write_text("time,mixing_entropy\n" + "".join(
+                f"{t!r},{min(1.0, t / 3.5)!r}\n" for t in times))
+        if summary:
+            (folder / "summary.json").write_text(json.dumps(summary))
+        rows.append({"name": name, "family": family, "status": "pending", "folder": f"runs/{name}",
+                     "point": {"gas.u_over_umf": 2.0}, "replica": int(name[-1]), "duration": 8.0})
+    (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": rows,
+                                                "scheduler": "LocalCluster(2 workers x 1 numba threads)"}))
+    return out
+
+
+def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_path, capsys):
+    from fvdem.study.status import study_status
+    out = _status_folder(tmp_path)
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    status = study_status(out)
+    runs = {r["name"]: r for r in status["runs"]}
+    assert [runs[n]["state"] for n in ("a_r1", "b_r1", "b_r2")] == ["ended", "in progress", "not started"]
+    assert runs["a_r1"]["t95"] == 3.0 and runs["a_r1"]["left"] == 0.0  # ended mixed: nothing left
+    assert runs["b_r1"]["simulated_seconds"] == pytest.approx(3.0)  # its time series, past its last stop
+    assert runs["b_r1"]["mixing_entropy"] == pytest.approx(3.0 / 3.5) and runs["b_r1"]["t95"] is None
+    # rates from the summaries: ar1 1000 CPU s over 5 s, ar4 1200 over the 2 s its last stop recorded
+    families = status["families"]
+    assert families["ar1"]["cpu_per_simulated_second"] == pytest.approx(200.0)
+    assert families["ar4"]["cpu_per_simulated_second"] == pytest.approx(600.0)
+    assert families["ar4"]["left_simulated_seconds"] == pytest.approx(5.0 + 8.0)
+    assert status["left_core_hours"] == pytest.approx(13.0 * 600.0 / 3600.0)
+    assert status["running"] is None and status["counts"]["ended"] == 1 and status["hours_at_running_now"] is None
+    # a run a process writes now is "running", and the hours left are spread over the runs running now
+    process = _hold(out / "runs" / "b_r1")
+    try:
+        now = study_status(out)
+        assert {r["name"]: r["state"] for r in now["runs"]}["b_r1"] == "running"
+        assert now["hours_at_running_now"] == pytest.approx(now["left_core_hours"])
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    assert main(["study", str(out), "--status"]) == 0
+    text = capsys.readouterr().out
+    assert "not running" in text and "1 ended, 1 in progress, 1 not started of 3 runs" in text
+    assert "at most 2.2 core-hours" in text and "ar4 600 (1 run(s)), peak 350 MB" in text
+    assert main(["study", str(out), "--status", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["counts"]["not started"] == 1
+    (out / "runs" / "b_r1" / LOCK_FILE).unlink()  # the probe's lock file aside, nothing was written
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert main(["study", str(tmp_path), "--status"]) == 2  # not a study folder
