@@ -114,7 +114,8 @@ def test_a_second_study_in_a_folder_a_study_runs_in_is_refused_and_moves_nothing
 
 
 def _status_folder(tmp_path) -> Path:
-    """A study folder as a campaign leaves it: a run at its end (mixed), one in progress, one not started."""
+    """A study folder as a campaign leaves it: a run at its end (mixed), one in progress (a checkpoint), one with
+    results but no checkpoint (as an archive holds a run in progress: it starts again), one not started."""
     out = tmp_path / "study"
     rows = []
     for name, family, held, summary in (
@@ -122,7 +123,8 @@ def _status_folder(tmp_path) -> Path:
                                   "peak_memory_mb": 400.0}),
             ("b_r1", "ar4", 3.0, {"simulated_time": 2.0, "stopped_early": True, "cpu_seconds": 1200.0,
                                   "peak_memory_mb": 350.0}),
-            ("b_r2", "ar4", 0.0, None)):
+            ("b_r2", "ar4", 0.0, None),
+            ("c_r1", "ar4", 1.0, None)):
         folder = out / "runs" / name
         folder.mkdir(parents=True)
         if held:
@@ -131,6 +133,8 @@ def _status_folder(tmp_path) -> Path:
                 f"{t!r},{min(1.0, t / 3.5)!r}\n" for t in times))
         if summary:
             (folder / "summary.json").write_text(json.dumps(summary))
+        if name == "b_r1":
+            (folder / "checkpoint.npz").write_bytes(b"a checkpoint at 2 s")
         rows.append({"name": name, "family": family, "status": "pending", "folder": f"runs/{name}",
                      "point": {"gas.u_over_umf": 2.0}, "replica": int(name[-1]), "duration": 8.0})
     (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": rows,
@@ -144,7 +148,9 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
     status = study_status(out)
     runs = {r["name"]: r for r in status["runs"]}
-    assert [runs[n]["state"] for n in ("a_r1", "b_r1", "b_r2")] == ["ended", "in progress", "not started"]
+    assert [runs[n]["state"] for n in ("a_r1", "b_r1", "b_r2", "c_r1")] == ["ended", "in progress", "not started",
+                                                                            "partial"]
+    assert runs["c_r1"]["simulated_seconds"] == 1.0 and runs["c_r1"]["left"] == 8.0  # starts again from t = 0
     assert runs["a_r1"]["t95"] == 3.0 and runs["a_r1"]["left"] == 0.0  # ended mixed: nothing left
     assert runs["b_r1"]["simulated_seconds"] == pytest.approx(3.0)  # its time series, past its last stop
     assert runs["b_r1"]["mixing_entropy"] == pytest.approx(3.0 / 3.5) and runs["b_r1"]["t95"] is None
@@ -152,8 +158,8 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     families = status["families"]
     assert families["ar1"]["cpu_per_simulated_second"] == pytest.approx(200.0)
     assert families["ar4"]["cpu_per_simulated_second"] == pytest.approx(600.0)
-    assert families["ar4"]["left_simulated_seconds"] == pytest.approx(5.0 + 8.0)
-    assert status["left_core_hours"] == pytest.approx(13.0 * 600.0 / 3600.0)
+    assert families["ar4"]["left_simulated_seconds"] == pytest.approx(5.0 + 8.0 + 8.0)
+    assert status["left_core_hours"] == pytest.approx(21.0 * 600.0 / 3600.0)
     assert status["running"] is None and status["counts"]["ended"] == 1 and status["hours_at_running_now"] is None
     # a run a process writes now is "running", and the hours left are spread over the runs running now
     process = _hold(out / "runs" / "b_r1")
@@ -166,8 +172,8 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
         process.wait()
     assert main(["study", str(out), "--status"]) == 0
     text = capsys.readouterr().out
-    assert "not running" in text and "1 ended, 1 in progress, 1 not started of 3 runs" in text
-    assert "at most 2.2 core-hours" in text and "ar4 600 (1 run(s)), peak 350 MB" in text
+    assert "not running" in text and "1 ended, 1 in progress, 1 partial, 1 not started of 4 runs" in text
+    assert "at most 3.5 core-hours" in text and "ar4 600 (1 run(s)), peak 350 MB" in text
     assert main(["study", str(out), "--status", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["counts"]["not started"] == 1
     (out / "runs" / "b_r1" / LOCK_FILE).unlink()  # the probe's lock file aside, nothing was written

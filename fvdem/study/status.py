@@ -12,12 +12,14 @@ import json
 from pathlib import Path
 
 from ..io.locks import describe_holder, holder
+from ..io.run_folder import CHECKPOINT
 from .reports import _series, report_for
 from .tasks import FAILED, _summary
 
-# a run's state in the status: at its end; a process writing it now; a checkpoint (or an archive's partial
-# results) it resumes from; nothing yet; its last attempt failed (its cause in study.json)
-STATES = ("ended", "running", "in progress", "not started", "failed")
+# a run's state in the status: at its end; a process writing it now; a checkpoint it resumes from; results
+# without a checkpoint (an archive's copy of a run in progress, a run stopped before its first checkpoint: it
+# starts again from t = 0); nothing yet; its last attempt failed (its cause in study.json)
+STATES = ("ended", "running", "in progress", "partial", "not started", "failed")
 
 
 def study_status(out) -> dict:
@@ -83,7 +85,7 @@ def _run_status(out: Path, r: dict, chosen) -> dict:
     elif r.get("status") == FAILED:
         state = "failed"
     elif held > 0:
-        state = "in progress"
+        state = "in progress" if (folder / CHECKPOINT).exists() else "partial"
     else:
         state = "not started"
     if state == "ended":
@@ -96,7 +98,8 @@ def _run_status(out: Path, r: dict, chosen) -> dict:
     cpu, measured = summary.get("cpu_seconds"), float(summary.get("simulated_time") or 0.0)
     row = {"name": r["name"], "family": r["family"], "point": r.get("point", {}), "replica": r.get("replica"),
            "state": state, "simulated_seconds": held, "duration": duration,
-           "left": 0.0 if state == "ended" or duration is None else max(0.0, duration - held),
+           "left": (0.0 if state == "ended" or duration is None
+                    else duration if state == "partial" else max(0.0, duration - held)),
            **values, **watched,
            "cpu_per_simulated_second": cpu / measured if cpu and measured > 0 else None,
            "peak_memory_mb": summary.get("peak_memory_mb"),
