@@ -50,6 +50,20 @@ def test_a_folder_held_by_another_process_is_refused_naming_it_and_freed_when_it
     assert holder(folder) is None and (folder / LOCK_FILE).exists()
 
 
+def test_a_run_folder_a_studys_worker_writes_is_refused_with_the_study_to_stop(tmp_path):
+    """The worker's command line says little (a Dask process): the refusal names the study that holds the
+    folder two levels up, and its --stop."""
+    out = tmp_path / "study"
+    study, run = _hold(out, "study"), _hold(out / "runs" / "ar1_r1")
+    try:
+        with pytest.raises(FolderInUse, match=f"fvdem study {out} --stop, or SIGINT to process {run.pid}"):
+            FolderLock(out / "runs" / "ar1_r1").acquire(retry=0.1)
+    finally:
+        for process in (study, run):
+            process.send_signal(signal.SIGKILL)
+            process.wait()
+
+
 def test_a_folder_made_for_a_writer_that_wrote_nothing_is_not_left_behind(tmp_path):
     with FolderLock(tmp_path / "new" / "run"):
         pass
