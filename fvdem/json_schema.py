@@ -137,6 +137,14 @@ def study_schema() -> dict:
                               "description": "runs with their own simulated seconds: duration and the family "
                                              "and axis values (each a value or a list) they match; the last "
                                              "matching table decides"},
+                "points": {"type": "array",
+                           "items": {"type": "object",
+                                     "anyOf": [{"required": ["duration"]}, {"required": ["replicas"]}],
+                                     "properties": {"duration": seconds, "replicas": replicas}},
+                           "description": "runs with their own simulated seconds and/or replicas (e.g. one more "
+                                          "where two lie within their spread): the family and axis values (each a "
+                                          "value or a list) they match; after [[durations]], the last matching "
+                                          "table decides each key"},
                 "cluster": {"type": "object", "properties": {"kind": {"enum": list(CLUSTER_KINDS)},
                                                               "workers": {"type": "integer", "minimum": 1}},
                             "description": "where the runs go: local, or dask-jobqueue's slurm, pbs, sge, lsf "

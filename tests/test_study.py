@@ -492,6 +492,37 @@ def test_durations_tables_give_the_runs_they_match_their_own_duration_and_a_wron
     assert "durations" in str(err.value) and "[[durations]]" in str(err.value)
 
 
+def test_points_tables_add_replicas_where_two_lie_within_their_spread_and_leave_the_runs_before_alone(tmp_path):
+    """[[points]]: a third replica at one point (a finding open within the replicas' spread), from its own
+    settled bed; the runs and beds the study had keep their names, and so their folders. A family of one
+    replica raised at one point keeps its first run's unsuffixed name. Wrong tables are refused by key."""
+    text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+    path = tmp_path / "study.toml"
+    two = text.replace('bed = "small"', 'bed = "small"\nreplicas = 2', 1)
+    path.write_text(two)
+    before = load_study(path, tmp_path / "out")
+    path.write_text(two + '\n[[points]]\nfamily = "ar1"\n"gas.u_over_umf" = 2.0\nreplicas = 3\nduration = 0.05\n')
+    after = load_study(path, tmp_path / "out")
+    added = [r for r in after.runs if r.name not in {b.name for b in before.runs}]
+    assert [r.name for r in added] == ["ar1_u_over_umf2_r3"] and added[0].bed == "small_r3"
+    kept = {r.name: r for r in after.runs}  # the same folders, the same physics (a duration is not physics)
+    assert all(kept[r.name].folder == r.folder and kept[r.name].physics == r.physics for r in before.runs)
+    assert {r.name: r.duration for r in after.runs if r.point["gas.u_over_umf"] == 2.0} == {
+        "ar1_u_over_umf2_r1": 0.05, "ar1_u_over_umf2_r2": 0.05, "ar1_u_over_umf2_r3": 0.05}
+    assert "small_r3" in [b.name for b in after.beds]
+    path.write_text(text + '\n[[points]]\n"gas.u_over_umf" = 2.9\nreplicas = 2\n')
+    names = [r.name for r in load_study(path, tmp_path / "out").runs]
+    assert names == ["ar1_u_over_umf2", "ar1_u_over_umf2.9", "ar1_u_over_umf2.9_r2"]
+    for table, key, shown in (('"gas.u_over_umf" = 2.0\nreplicas = 0', "points[0].replicas", "0"),
+                              ('"gas.u_over_umf" = 2.0', "points[0]", "sets none of duration, replicas"),
+                              ('family = "ar9"\nreplicas = 2', "points[0].family", "'ar9'"),
+                              ('"gas.u_over_umf" = 2.0\nreplica = 2', "points[0].replica", "did you mean")):
+        path.write_text(text + "\n[[points]]\n" + table + "\n")
+        with pytest.raises(CaseError) as err:
+            load_study(path, tmp_path / "out")
+        assert key in str(err.value) and shown in str(err.value), str(err.value)
+
+
 def _small_run(tmp_path, end):
     bed_case = ROOT / "cases" / "demo.toml"
     out = tmp_path / "study"

@@ -179,7 +179,7 @@ def _compare_binarity(rows) -> dict:
         spread = _overlap(_points(by[v]["ar1"]), _points(by[v]["ar4_mp"]))
         if spread:
             close.append(f"{v:g} Umf within the replicas' spread (AR-1 {spread[0]} against AR-4 MP {spread[1]}; "
-                         "more replicas would tell)")
+                         "more replicas would tell: [[points]])")
         elif abs(a - b) < CLOSE * max(a, b) and max(len(by[v]["ar1"]), len(by[v]["ar4_mp"])) < 2:
             close.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
     rule = ("binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run; means of "
@@ -262,7 +262,7 @@ def _compare(rows, faster, slower, velocities, claim):
         spread = _overlap(*(_intervals(rows, f, v) for f in (faster, slower)))
         if spread:
             why.append(f"{v:g} Umf within the replicas' spread ({faster} {spread[0]} s against {slower} {spread[1]} "
-                       "s; more replicas would tell)")
+                       "s; more replicas would tell: [[points]])")
             del faster_at[v]
         elif gap < CLOSE and max(n_a, n_b) < 2:
             why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
@@ -415,7 +415,7 @@ def _expansion(rows) -> dict:
         spread = _overlap(_points(a[v]), _points(b[v]))
         if spread:
             why.append(f"{v:g} Umf within the replicas' spread (AR-4 MP {spread[0]} against AR-1 {spread[1]}; "
-                       "more replicas would tell)")
+                       "more replicas would tell: [[points]])")
         elif abs(ma - mb) < CLOSE * max(ma, mb) and max(len(a[v]), len(b[v])) < 2:
             why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
     rule = (f"mean bed expansion (bed_top from {WINDOW_START:g} s after the inlet ramp for {WINDOW:g} s, over "

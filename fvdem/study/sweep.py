@@ -18,7 +18,7 @@ from .reports import DEFAULT_REPORT, REPORTS, report_for
 BED_STATE = ("particles.initial_state",)
 
 STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
-              "durations", "cluster", "report"}
+              "durations", "points", "cluster", "report"}
 
 
 @dataclass(frozen=True)
@@ -152,7 +152,9 @@ def study_from_table(table: dict, path, out) -> Study:
     if not isinstance(exclusions, list) or not all(isinstance(e, dict) for e in exclusions):
         _problem(problems, "exclude", exclusions, "a list of tables ([[exclude]] with family and axis values)")
         exclusions = []
-    durations = _durations(table.get("durations", []), families, axes, problems)
+    # [[durations]] (duration) and [[points]] (duration, replicas): the last table that matches a run decides
+    chosen = (_point_tables(table.get("durations", []), "durations", ("duration",), families, axes, problems)
+              + _point_tables(table.get("points", []), "points", ("duration", "replicas"), families, axes, problems))
     runs = []
     names = list(axes)
     for family, spec in families.items():
@@ -175,16 +177,21 @@ def study_from_table(table: dict, path, out) -> Study:
             point = dict(zip(names, values))
             if any(all((family if k == "family" else point.get(k)) == v for k, v in e.items()) for e in exclusions):
                 continue
-            for replica in range(1, family_replicas + 1):
+            run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
+            point_replicas = family_replicas
+            for match, values in chosen:
+                if match(family, point):
+                    run_duration = values.get("duration", run_duration)
+                    point_replicas = values.get("replicas", point_replicas)
+            for replica in range(1, point_replicas + 1):
                 label = "_".join(f"{k.split('.')[-1]}{v:g}" if isinstance(v, (int, float)) else f"{k.split('.')[-1]}{v}"
                                  for k, v in point.items())
-                run_name = "_".join(x for x in (family, label, f"r{replica}" if family_replicas > 1 else "") if x)
-                run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
-                for match, seconds in durations:  # the last [[durations]] table that matches the run decides
-                    if match(family, point):
-                        run_duration = seconds
+                # the first replica's name is the family's (unsuffixed where the family has one replica), so that
+                # replicas added at a point later ([[points]]) leave the folders of the runs before them alone
+                suffix = f"r{replica}" if family_replicas > 1 or replica > 1 else ""
+                run_name = "_".join(x for x in (family, label, suffix) if x)
                 overrides = {**settings, **sets, **point, "time.end": run_duration}
-                if family_replicas > 1 and bed is None:  # a run that inserts its own particles
+                if point_replicas > 1 and bed is None:  # a run that inserts its own particles
                     overrides["particles.insertion.seed"] = replica
                 runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name),
                                     replica_bed(bed, replica) if bed is not None else None, point, run_duration,
@@ -212,26 +219,35 @@ def _matches(key, wanted, value) -> bool:
     return value in wanted if isinstance(wanted, list) else value == wanted
 
 
-def _durations(tables, families: dict, axes: dict, problems) -> list:
-    """The ``[[durations]]`` tables as ``(match(family, point), seconds)``: each gives the runs that match all
-    its keys (``family`` and axis keys, each a value or a list of values) their own simulated seconds
-    (``duration``), e.g. the slow-mixing low velocities of a study run longer. A key that is not ``family``,
-    ``duration`` or an axis, a family or axis value the study lacks and a wrong duration are problems."""
+def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, problems) -> list:
+    """The ``[[durations]]`` or ``[[points]]`` tables (``name``) as ``(match(family, point), {key: value})``: each
+    gives the runs that match all its selectors (``family`` and axis keys, each a value or a list of values)
+    its values of ``keys``: ``duration`` (simulated seconds, e.g. the slow-mixing low velocities of a study run
+    longer) and, in ``[[points]]``, ``replicas`` (e.g. a third replica where two lie within their spread). A
+    key that is neither a selector nor one of ``keys``, a family or axis value the study lacks, a table that
+    sets none of ``keys`` and a wrong value are problems."""
     if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
-        _problem(problems, "durations", tables, "a list of tables ([[durations]] with duration = simulated "
-                 "seconds and the family and axis values of the runs it applies to)")
+        _problem(problems, name, tables, f"a list of tables ([[{name}]] with {' and/or '.join(keys)} and the family "
+                 "and axis values of the runs it applies to)")
         return []
     out = []
-    allowed = {"family", "duration", *axes}
+    allowed = {"family", *keys, *axes}
     for k, spec in enumerate(tables):
-        where = f"durations[{k}]"
-        seconds = spec.get("duration")
-        if not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or not 0 < seconds < 1e6:
-            _problem(problems, f"{where}.duration", seconds, "a number of simulated seconds > 0")
-            continue
-        keys = {key: wanted for key, wanted in spec.items() if key != "duration"}
-        bad = False
-        for key, wanted in keys.items():
+        where = f"{name}[{k}]"
+        values, bad = {}, False
+        if "duration" in spec:
+            seconds = spec["duration"]
+            if not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or not 0 < seconds < 1e6:
+                _problem(problems, f"{where}.duration", seconds, "a number of simulated seconds > 0")
+                bad = True
+            else:
+                values["duration"] = float(seconds)
+        if "replicas" in spec and "replicas" in keys:
+            count = _replicas(spec, f"{where}.replicas", 1, problems)
+            bad = bad or count != spec["replicas"]
+            values["replicas"] = count
+        selectors = {key: wanted for key, wanted in spec.items() if key not in keys}
+        for key, wanted in selectors.items():
             known = list(families) if key == "family" else axes.get(key)
             if known is None:
                 _problem(problems, f"{where}.{key}", wanted, f"unknown key{_did_you_mean(key, allowed)}; allowed: "
@@ -241,10 +257,13 @@ def _durations(tables, families: dict, axes: dict, problems) -> list:
                 _problem(problems, f"{where}.{key}", wanted, "one of the study's values or a list of them: "
                          + ", ".join(map(str, known)))
                 bad = True
+        if not bad and not values:
+            _problem(problems, where, spec, f"sets none of {', '.join(keys)}")
+            bad = True
         if not bad:
-            out.append(((lambda family, point, keys=keys: all(
-                _matches(key, wanted, family if key == "family" else point.get(key)) for key, wanted in keys.items())),
-                float(seconds)))
+            out.append(((lambda family, point, selectors=selectors: all(
+                _matches(key, wanted, family if key == "family" else point.get(key))
+                for key, wanted in selectors.items())), values))
     return out
 
 
