@@ -135,25 +135,26 @@ def plot_void_fractions(runs, path, below=0.3):
 CLOSE = 0.10  # relative differences below this need replicas to be told from chaos
 
 
-def _overlap(a: list, b: list) -> tuple | None:
-    """Whether two families' values at one velocity lie within their spread, where either has replicas: each
-    value a ``(low, high)`` interval (a measured value ``(x, x)``; a run not mixed by its end ``(end, inf)``:
-    its t95 lies beyond), each family's range from its lowest low to its highest high. Overlapping ranges
-    (the replicas of one family reach past the other's) cannot tell the order: returns both ranges as text,
-    e.g. ``("1.63-2.57", "1.73-1.75")``, ``"> 20"`` where a range has no upper end; None where they are apart,
-    or neither family has two values (the ``CLOSE`` rule then)."""
+SPREAD = 2.0  # with replicas, an order is told where the means differ by more than this many standard errors
+
+
+def _within_spread(a: list, b: list) -> str | None:
+    """Whether two families' replica values at one velocity (a run not mixed by its end counted at its end) lie
+    within their spread, where either has replicas: the difference of the means within ``SPREAD`` standard
+    errors of it, ``sqrt(var_a / n_a + var_b / n_b)`` with each family's sample variance (a family of one run
+    takes the other's: the same chaos). More replicas shrink the error, so an order that exists is told in the
+    end. Returns the means and the bound as text, or None where the difference is beyond it, or neither family
+    has replicas (the ``CLOSE`` rule then)."""
     if max(len(a), len(b)) < 2:
         return None
-    (lo_a, hi_a), (lo_b, hi_b) = ((min(x[0] for x in v), max(x[1] for x in v)) for v in (a, b))
-    if lo_a > hi_b or lo_b > hi_a:
+    means = [sum(v) / len(v) for v in (a, b)]
+    var = [sum((x - m) ** 2 for x in v) / (len(v) - 1) if len(v) > 1 else None for v, m in zip((a, b), means)]
+    var = [x if x is not None else y for x, y in zip(var, reversed(var))]
+    error = (var[0] / len(a) + var[1] / len(b)) ** 0.5
+    if abs(means[0] - means[1]) > SPREAD * error:
         return None
-    return tuple(f"> {lo:.3g}" if hi == float("inf") else f"{lo:.3g}-{hi:.3g}" if lo != hi else f"{lo:.3g}"
-                 for lo, hi in ((lo_a, hi_a), (lo_b, hi_b)))
-
-
-def _points(values) -> list:
-    """Measured values as ``_overlap``'s intervals."""
-    return [(x, x) for x in values]
+    return (f"means {means[0]:.3g} ({', '.join(f'{x:.3g}' for x in a)}) against {means[1]:.3g} "
+            f"({', '.join(f'{x:.3g}' for x in b)}), within {SPREAD:g} standard errors ({SPREAD * error:.3g})")
 
 
 TERMINAL = 0.25  # a terminal t95 within this of the paper's "about" value holds
@@ -176,14 +177,15 @@ def _compare_binarity(rows) -> dict:
     for v in common:
         a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
         values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
-        spread = _overlap(_points(by[v]["ar1"]), _points(by[v]["ar4_mp"]))
+        spread = _within_spread(by[v]["ar1"], by[v]["ar4_mp"])
         if spread:
-            close.append(f"{v:g} Umf within the replicas' spread (AR-1 {spread[0]} against AR-4 MP {spread[1]}; "
-                         "more replicas would tell: [[points]])")
+            close.append(f"{v:g} Umf within the replicas' spread (AR-1 against AR-4 MP: {spread}; more replicas "
+                         "would tell: [[points]])")
         elif abs(a - b) < CLOSE * max(a, b) and max(len(by[v]["ar1"]), len(by[v]["ar4_mp"])) < 2:
             close.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
     rule = ("binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run; means of "
-            f"the replicas, apart beyond their spread (within {100 * CLOSE:.0f} % without replicas: too noisy)")
+            f"the replicas apart by more than {SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without "
+            "replicas: too noisy)")
     if close:
         return {"finding": claim, "verdict": "open", "why": "; ".join(close), "values": values, "rule": rule}
     holds = all(x["ar1"] > x["ar4_mp"] for x in values.values())
@@ -228,8 +230,8 @@ def _compare(rows, faster, slower, velocities, claim):
     each family's replicas, a run not mixed by its end counted at its end (its t95 lies beyond: the mean is
     then a lower bound, with no upper one). At a velocity, ``faster`` is faster where its mean (known) lies
     below ``slower``'s lower bound, not faster where its lower bound reaches ``slower``'s mean; where either
-    family has replicas, only if their ranges are apart (``_overlap``: within the spread the order is open),
-    and without replicas a difference within ``CLOSE`` is too noisy to tell. One velocity where it is not
+    family has replicas, only beyond their spread (``_within_spread``: within it the order is open), and
+    without replicas a difference within ``CLOSE`` is too noisy to tell. One velocity where it is not
     faster decides."""
     a, b = _mean_t95(rows, faster), _mean_t95(rows, slower)
     common = sorted(v for v in set(a) & set(b) if velocities(v))
@@ -259,16 +261,16 @@ def _compare(rows, faster, slower, velocities, claim):
             why.append(f"{unmixed} not mixed by its end at {v:g} Umf: its mean t95 is only known to exceed "
                        f"{low:.3g} s, against {other:.3g} s (run it longer: [[durations]])")
             continue
-        spread = _overlap(*(_intervals(rows, f, v) for f in (faster, slower)))
+        spread = _within_spread(*(_counted(rows, f, v) for f in (faster, slower)))
         if spread:
-            why.append(f"{v:g} Umf within the replicas' spread ({faster} {spread[0]} s against {slower} {spread[1]} "
-                       "s; more replicas would tell: [[points]])")
+            why.append(f"{v:g} Umf within the replicas' spread ({faster} against {slower}, t95 [s]: {spread}; "
+                       "more replicas would tell: [[points]])")
             del faster_at[v]
         elif gap < CLOSE and max(n_a, n_b) < 2:
             why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
             del faster_at[v]
-    rule = ("mean t95 of the replicas, a run not mixed by its end counted at its end (a lower bound), apart beyond "
-            f"the replicas' spread; differences within {100 * CLOSE:.0f} % need replicas")
+    rule = ("mean t95 of the replicas, a run not mixed by its end counted at its end (a lower bound), apart by "
+            f"more than {SPREAD:g} standard errors; differences within {100 * CLOSE:.0f} % need replicas")
     if not all(faster_at.values()):
         return {"finding": claim, "verdict": "does not hold", "values": values, "rule": rule}
     if why:
@@ -276,11 +278,10 @@ def _compare(rows, faster, slower, velocities, claim):
     return {"finding": claim, "verdict": "holds", "values": values, "rule": rule}
 
 
-def _intervals(rows, family, v) -> list:
-    """A family's replicas at ``v`` as ``_overlap``'s intervals: t95 ``(t95, t95)``, a run not mixed by its end
-    ``(end, inf)``."""
+def _counted(rows, family, v) -> list:
+    """A family's replicas' t95 at ``v``, a run not mixed by its end counted at its end (``_mean_t95``'s values)."""
     ends = _by_velocity(rows, family, "simulated_seconds")[v]
-    return [(t, t) if t is not None else (e, float("inf")) for t, e in zip(_t95(rows, family)[v], ends)]
+    return [t if t is not None else e for t, e in zip(_t95(rows, family)[v], ends)]
 
 
 def _unmixed(rows, family, v) -> str:
@@ -412,15 +413,15 @@ def _expansion(rows) -> dict:
     for v in common:
         ma, mb = sum(a[v]) / len(a[v]), sum(b[v]) / len(b[v])
         values[f"{v:g}"] = {"ar4_mp": a[v], "ar1": b[v]}
-        spread = _overlap(_points(a[v]), _points(b[v]))
+        spread = _within_spread(a[v], b[v])
         if spread:
-            why.append(f"{v:g} Umf within the replicas' spread (AR-4 MP {spread[0]} against AR-1 {spread[1]}; "
-                       "more replicas would tell: [[points]])")
+            why.append(f"{v:g} Umf within the replicas' spread (AR-4 MP against AR-1: {spread}; more replicas "
+                       "would tell: [[points]])")
         elif abs(ma - mb) < CLOSE * max(ma, mb) and max(len(a[v]), len(b[v])) < 2:
             why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
     rule = (f"mean bed expansion (bed_top from {WINDOW_START:g} s after the inlet ramp for {WINDOW:g} s, over "
-            "its settled value) of AR-4 MP above AR-1's at every velocity both ran, apart beyond the replicas' "
-            f"spread (within {100 * CLOSE:.0f} % without replicas: too noisy)")
+            f"its settled value) of AR-4 MP above AR-1's at every velocity both ran, the means apart by more than "
+            f"{SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without replicas: too noisy)")
     if why:
         return {"finding": claim, "verdict": "open", "why": "; ".join(why), "values": values, "rule": rule}
     holds = all(sum(a[v]) / len(a[v]) > sum(b[v]) / len(b[v]) for v in common)
