@@ -7,7 +7,6 @@ Writers only read the state, so a run resumed from a checkpoint continues bit-fo
 """
 from __future__ import annotations
 
-import contextlib
 import time as _time
 from dataclasses import asdict
 from pathlib import Path
@@ -15,8 +14,8 @@ from pathlib import Path
 from .case import Case, to_toml
 from .errors import SimulationError
 from .io.checkpoint import load_checkpoint
-from .io.locks import FolderLock
-from .io.run_folder import (CHECKPOINT, OutputError, RunState, Schedule, check_resumable, prepare_output,
+from .io.locks import folder_lock
+from .io.run_folder import (CHECKPOINT, OutputError, RunState, Schedule, guarded_write, open_output, prepare_output,
                             write_checkpoint, write_final, write_snapshot)
 from .io.progress import advance_bar, progress_bar
 from .io.run_log import RunLog
@@ -48,28 +47,12 @@ class Simulation:
         self._stop_when = stop_file if callable(stop_file) else (Path(stop_file).exists if stop_file else None)
         self.threads = set_threads(case.run.threads if threads is None else threads)
         self.progress = case.output.progress if progress is None else progress
-        # one writer at a time (``fvdem.io.locks``): held while this object writes (here, and in each run())
-        self._lock = FolderLock(out_dir, "run", {"case": case.name}) if out_dir is not None else None
-        with self._writing():
-            self.out = prepare_output(out_dir, overwrite, resume) if out_dir is not None else None
-            if resume and self.out is not None:
-                check_resumable(case, self.out)
+        self._lock = folder_lock(out_dir, {"case": case.name})  # one writer per folder (``fvdem.io.locks``)
+        with self._lock:  # here and in each run(): another process writing the folder is refused (FolderInUse)
+            self.out = open_output(out_dir, case, overwrite, resume) if out_dir is not None else None
             self.log = RunLog(self.out)  # run.log: provenance, progress, warnings (nothing without a folder)
             with self.log.warnings_captured():
                 self._build(case, resume)
-
-    @contextlib.contextmanager
-    def _writing(self):
-        """The run folder's lock for the block (none without a folder): a second process writing the same
-        folder is refused (``FolderInUse``, an ``OutputError``) before it touches anything."""
-        if self._lock is None:
-            yield
-            return
-        self._lock.acquire()
-        try:
-            yield
-        finally:
-            self._lock.release()
 
     def _build(self, case: Case, resume: bool) -> None:
         """The scene, the model (from the checkpoint when resuming), the schedules and the writers."""
@@ -117,9 +100,8 @@ class Simulation:
 
     def run(self, duration: float | None = None) -> dict:
         """Advance ``duration`` [s] (default: to ``time.end``), or until the scene ends the run (settled, mixed)
-        or it is stopped. Returns the summary dictionary (also written as summary.json with an output folder).
-        Another process writing the output folder meanwhile is refused (``FolderInUse``)."""
-        with self._writing():
+        or it is stopped. Returns the summary dictionary (also written as summary.json with an output folder)."""
+        with self._lock:
             return self._run(duration)
 
     def _run(self, duration: float | None) -> dict:
@@ -217,17 +199,8 @@ class Simulation:
         write_checkpoint(self.out, self.model, {"writers": state, "time": self.time})
 
     def _write_guarded(self, write, *args) -> None:
-        """Run a writer; a full disk or an unwritable folder stops the run with ``OutputError`` (the
-        checkpoint is replaced atomically, so the last complete one stays intact)."""
-        try:
-            write(*args)
-        except OSError as exc:
-            where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
-            raise OutputError(
-                f"writing the output failed at t = {self.time:.6g} s{where}: {exc.strerror or exc}; the last "
-                f"complete checkpoint in {self.out} is intact: free space or fix the folder's permissions, then "
-                "continue with --resume") from None
-
+        """Run a writer; a full disk or an unwritable folder stops the run (``run_folder.guarded_write``)."""
+        guarded_write(write, args, self.time, self.out)
 
 __all__ = ["Simulation", "SimulationError", "OutputError", "build_particles", "build_dem", "load_initial_state",
            "prepare_output"]

@@ -183,3 +183,9 @@ def _command() -> str:
     name = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else "python"
     line = " ".join([name, *sys.argv[1:]])
     return line if len(line) <= 300 else line[:297] + "..."
+
+
+def folder_lock(folder, details: dict | None = None):
+    """A run folder's ``FolderLock`` (``kind`` "run"), or a no-op context for a run without a folder (None)."""
+    import contextlib
+    return contextlib.nullcontext() if folder is None else FolderLock(folder, "run", details)

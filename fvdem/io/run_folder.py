@@ -86,6 +86,27 @@ def prepare_output(out_dir, overwrite: bool = False, resume: bool = False) -> Pa
                           + (f" ({exc.filename})" if exc.filename and str(exc.filename) != str(out) else "")) from None
 
 
+def open_output(out_dir, case: Case, overwrite: bool = False, resume: bool = False) -> Path:
+    """``prepare_output``, and a folder to resume checked against ``case`` (``check_resumable``)."""
+    out = prepare_output(out_dir, overwrite, resume)
+    if resume:
+        check_resumable(case, out)
+    return out
+
+
+def guarded_write(write, args, time: float, out: Path) -> None:
+    """Run a writer of a run at ``time`` [s] into ``out``; a full disk or an unwritable folder stops the run with
+    ``OutputError`` (the checkpoint is replaced atomically, so the last complete one stays intact)."""
+    try:
+        write(*args)
+    except OSError as exc:
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        raise OutputError(
+            f"writing the output failed at t = {time:.6g} s{where}: {exc.strerror or exc}; the last "
+            f"complete checkpoint in {out} is intact: free space or fix the folder's permissions, then "
+            "continue with --resume") from None
+
+
 def check_resumable(case: Case, out: Path) -> None:
     """Refuse to resume ``out`` with a case whose physics differs from the one it was started with
     (its ``case.toml``), naming every key that differs; end time, output and run settings may change."""
