@@ -129,11 +129,11 @@ def format_status(status: dict) -> str:
                      f"{_cell(r['cpu_per_simulated_second'], '.0f'):>11}  {_cell(r['peak_memory_mb'], '.0f'):>7}")
     counts = status["counts"]
     total = sum(r["duration"] or r["simulated_seconds"] for r in status["runs"])
+    by_family = ", ".join(f"{name} {f['left_simulated_seconds']:.4g}" for name, f in status["families"].items()
+                          if f["left_simulated_seconds"] > 0)
     lines += ["", ", ".join(f"{n} {state}" for state, n in counts.items() if n) + f" of {len(status['runs'])} runs; "
               f"{total - status['left_simulated_seconds']:.4g} of {total:.4g} simulated s done, "
-              f"{status['left_simulated_seconds']:.4g} left ("
-              + ", ".join(f"{name} {f['left_simulated_seconds']:.4g}" for name, f in status["families"].items()
-                          if f["left_simulated_seconds"] > 0) + ")"]
+              f"{status['left_simulated_seconds']:.4g} left" + (f" ({by_family})" if by_family else "")]
     lines.append("CPU s per simulated s so far: " + "; ".join(
         f"{name} " + (f"{f['cpu_per_simulated_second']:.0f} ({f['runs_measured']} run(s)), peak "
                       f"{f['peak_memory_mb']:.0f} MB" if f["cpu_per_simulated_second"] is not None else "not measured")
