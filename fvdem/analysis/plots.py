@@ -182,17 +182,36 @@ def mixing_times(runs, level=MIXED, names=None) -> dict:
 
 def plot_t95(runs, path, level=MIXED, names=None) -> Path:
     """Mixing time t95 against U/Umf, one line per case name (or per ``names``, the group of each
-    run; Mema et al. (2020) Fig. 4). A run that has not reached the level is drawn as an open triangle at its
-    end time: t95 is later than that."""
+    run; Mema et al. (2020) Fig. 4). Each run is a marker (replicas side by side at their U/Umf); the line
+    joins the means of the replicas at each U/Umf. A run that has not reached the level is an open triangle
+    at its end time (t95 is later), and a mean that counts one so is open too: a lower bound."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
+    bounds = False
     for name, rows in mixing_times(runs, level, names).items():
-        reached = [(r, t) for r, t, _ in rows if t is not None]
-        line, = ax.plot([r for r, _ in reached], [t for _, t in reached], "o-", label=name)
-        bound = [(r, end) for r, t, end in rows if t is None]
-        if bound:
-            ax.plot([r for r, _ in bound], [e for _, e in bound], "^", mfc="none", color=line.get_color(),
-                    label=f"{name}: not reached by the run's end (lower bound)")
+        by = {}
+        for ratio, t, end in rows:
+            by.setdefault(ratio, []).append((t, end))
+        ratios = sorted(by)
+        means = [float(np.mean([t if t is not None else end for t, end in by[r]])) for r in ratios]
+        replicas = max(len(v) for v in by.values()) > 1
+        line, = ax.plot(ratios, means, "-")
+        colour = line.get_color()
+        ax.plot([], [], "o-", color=colour, ms=4, label=f"{name} (runs; the line: mean of its replicas)"
+                if replicas else name)
+        for r, mean in zip(ratios, means):
+            if len(by[r]) > 1:  # the mean: filled if every replica mixed, open if it is a lower bound
+                bounded = any(t is None for t, _ in by[r])
+                ax.plot(r, mean, "_", color=colour, ms=12, mew=2 if not bounded else 1)
+            offsets = (np.arange(len(by[r])) - (len(by[r]) - 1) / 2) * 0.015
+            for (t, end), dx in zip(by[r], offsets):
+                if t is not None:
+                    ax.plot(r + dx, t, "o", color=colour, ms=4)
+                else:
+                    ax.plot(r + dx, end, "^", mfc="none", color=colour, ms=6)
+                    bounds = True
+    if bounds:
+        ax.plot([], [], "^", mfc="none", color="0.3", label="not mixed by the run's end (a lower bound)")
     ax.set_xlabel("U / Umf")
     ax.set_ylabel(f"mixing time t{round(100 * level)} [s]")
     ax.grid(alpha=0.3)
