@@ -193,3 +193,15 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     (out / "runs" / "b_r1" / LOCK_FILE).unlink()  # the probe's lock file aside, nothing was written
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert main(["study", str(tmp_path), "--status"]) == 2  # not a study folder
+
+
+def test_study_and_summary_files_are_replaced_at_once_for_readers_polling_them(tmp_path):
+    """study.json and summary.json are read while they are rewritten (--status, a study's progress, --report):
+    written to a temporary file and renamed over the old one, nothing else left in the folder."""
+    from fvdem.io.run_folder import write_text_atomic
+    path = tmp_path / "study.json"
+    path.write_text('{"old": 1}\n')
+    before = os.stat(path).st_ino
+    write_text_atomic(path, '{"new": 2}\n')
+    assert json.loads(path.read_text()) == {"new": 2} and os.stat(path).st_ino != before  # a new file, renamed
+    assert [p.name for p in tmp_path.iterdir()] == ["study.json"]

@@ -197,6 +197,16 @@ def write_checkpoint(out: Path, model, meta: dict) -> None:
     save_checkpoint(out / CHECKPOINT, model.state(), meta)
 
 
+def write_text_atomic(path, text: str) -> None:
+    """``path``'s text replaced at once (a temporary file renamed over it): a reader polling it while it is
+    written (``fvdem study --status``, a study's progress, ``--report`` while a study runs) sees the old
+    text or the new, never half of one."""
+    path = Path(path)
+    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
 def write_final(out: Path, particles, summary: dict) -> None:
     """``final_state.npz`` (the particles in id order, written atomically) and ``summary.json``."""
     if particles is not None:
@@ -205,7 +215,7 @@ def write_final(out: Path, particles, summary: dict) -> None:
         with open(tmp, "wb") as fh:
             np.savez(fh, **{k: v[order] for k, v in particles.as_dict().items()})
         os.replace(tmp, out / FINAL_STATE)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    write_text_atomic(out / "summary.json", json.dumps(summary, indent=2) + "\n")
 
 
 # checkpoints written before the scenes (up to b38a3bd) kept each history under its own key

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..io.locks import LOCK_FILE
+from ..io.run_folder import write_text_atomic
 from .tasks import ENDED, FAILED, IN_PROGRESS, _simulated_so_far
 
 
@@ -193,9 +194,9 @@ def archive(out, dest) -> list:
             chosen.archive_extra(folder, target)
         runs[r["name"]] = {**r, "folder": f"runs/{r['name']}", "simulated_seconds": float(series["time"][-1])}
         written.append(target)
-    (dest / "study.json").write_text(json.dumps({**{k: v for k, v in index.items() if k != "runs"},
-                                                 "archived_from": str(out), "runs": list(runs.values())}, indent=1)
-                                     + "\n")
+    write_text_atomic(dest / "study.json", json.dumps({**{k: v for k, v in index.items() if k != "runs"},
+                                                      "archived_from": str(out), "runs": list(runs.values())},
+                                                     indent=1) + "\n")
     if (out / "study.toml").exists():
         (dest / "study.toml").write_text((out / "study.toml").read_text())
     return written + report(dest)

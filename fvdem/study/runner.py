@@ -13,6 +13,7 @@ from pathlib import Path
 
 from ..case import CaseError, load_case
 from ..io.locks import FolderLock
+from ..io.run_folder import write_text_atomic
 from .cluster import close_client, make_client, worker_count
 from .reports import report_for
 from .sweep import BedSpec, RunSpec, Study
@@ -361,7 +362,7 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll) 
                "wall_seconds": time.perf_counter() - started}
     if (out / STOP_FILE).exists():
         summary["stopped"] = True
-    (out / "study.json").write_text(json.dumps(summary, indent=1) + "\n")
+    write_text_atomic(out / "study.json", json.dumps(summary, indent=1) + "\n")
     return summary
 
 
@@ -400,5 +401,5 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
              "report": study.report,
              **({"scheduler": description} if description else {}), "runs": runs}
-    path.write_text(json.dumps(index, indent=1) + "\n")
+    write_text_atomic(path, json.dumps(index, indent=1) + "\n")
     return index
