@@ -135,8 +135,9 @@ def format_status(status: dict) -> str:
               f"{total - status['left_simulated_seconds']:.4g} of {total:.4g} simulated s done, "
               f"{status['left_simulated_seconds']:.4g} left" + (f" ({by_family})" if by_family else "")]
     lines.append("CPU s per simulated s so far: " + "; ".join(
-        f"{name} " + (f"{f['cpu_per_simulated_second']:.0f} ({f['runs_measured']} run(s)), peak "
-                      f"{f['peak_memory_mb']:.0f} MB" if f["cpu_per_simulated_second"] is not None else "not measured")
+        f"{name} " + (f"{f['cpu_per_simulated_second']:.0f} ({f['runs_measured']} run(s))"
+                      if f["cpu_per_simulated_second"] is not None else "not measured")
+        + (f", peak {f['peak_memory_mb']:.0f} MB" if f["peak_memory_mb"] is not None else "")
         for name, f in status["families"].items()))
     if status["left_core_hours"] is not None and status["left_simulated_seconds"] > 0:
         line = (f"left: at most {status['left_core_hours']:.1f} core-hours at these rates (runs that end early, "
