@@ -484,14 +484,11 @@ def test_durations_tables_give_the_runs_they_match_their_own_duration_and_a_wron
     for (family, ratio), run in runs.items():  # the last matching table decides; unmatched runs keep the study's
         expected = (0.07 if family == "ar1" else 0.05) if ratio == 2.0 else study.duration
         assert run.duration == expected and run.overrides["time.end"] == expected, (family, ratio)
-    for table, key, shown in (('"gas.u_over_umf" = 1.6\nduration = 1.0', "durations[0].gas.u_over_umf", "1.6"),
-                              ('family = "ar9"\nduration = 1.0', "durations[0].family", "'ar9'"),
-                              ('"gas.umf" = 1.9\nduration = 1.0', "durations[0].gas.umf", "1.9"),
-                              ('family = "ar1"\nduration = -2', "durations[0].duration", "-2")):
-        path.write_text(text + "\n[[durations]]\n" + table + "\n")
-        with pytest.raises(CaseError) as err:
-            load_study(path, tmp_path / "out")
-        assert key in str(err.value) and shown in str(err.value), str(err.value)
+    _refused_tables(path, text, "durations", (
+        ('"gas.u_over_umf" = 1.6\nduration = 1.0', "durations[0].gas.u_over_umf", "1.6"),
+        ('family = "ar9"\nduration = 1.0', "durations[0].family", "'ar9'"),
+        ('"gas.umf" = 1.9\nduration = 1.0', "durations[0].gas.umf", "1.9"),
+        ('family = "ar1"\nduration = -2', "durations[0].duration", "-2")))
     path.write_text('durations = 3\n' + text)
     with pytest.raises(CaseError) as err:
         load_study(path, tmp_path / "out")
@@ -519,13 +516,20 @@ def test_points_tables_add_replicas_where_two_lie_within_their_spread_and_leave_
     path.write_text(text + '\n[[points]]\n"gas.u_over_umf" = 2.9\nreplicas = 2\n')
     names = [r.name for r in load_study(path, tmp_path / "out").runs]
     assert names == ["ar1_u_over_umf2", "ar1_u_over_umf2.9", "ar1_u_over_umf2.9_r2"]
-    for table, key, shown in (('"gas.u_over_umf" = 2.0\nreplicas = 0', "points[0].replicas", "0"),
-                              ('"gas.u_over_umf" = 2.0', "points[0]", "sets none of duration, replicas"),
-                              ('family = "ar9"\nreplicas = 2', "points[0].family", "'ar9'"),
-                              ('"gas.u_over_umf" = 2.0\nreplica = 2', "points[0].replica", "did you mean")):
-        path.write_text(text + "\n[[points]]\n" + table + "\n")
+    _refused_tables(path, text, "points", (
+        ('"gas.u_over_umf" = 2.0\nreplicas = 0', "points[0].replicas", "0"),
+        ('"gas.u_over_umf" = 2.0', "points[0]", "sets none of duration, replicas"),
+        ('family = "ar9"\nreplicas = 2', "points[0].family", "'ar9'"),
+        ('"gas.u_over_umf" = 2.0\nreplica = 2', "points[0].replica", "did you mean")))
+
+
+def _refused_tables(path, text, heading, cases):
+    """Each ``(table, key, shown)``: the study ``text`` with that ``[[heading]]`` table is refused, naming the key
+    path and the value."""
+    for table, key, shown in cases:
+        path.write_text(text + f"\n[[{heading}]]\n" + table + "\n")
         with pytest.raises(CaseError) as err:
-            load_study(path, tmp_path / "out")
+            load_study(path, path.parent / "out")
         assert key in str(err.value) and shown in str(err.value), str(err.value)
 
 

@@ -13,6 +13,7 @@ folders go unlocked.
 """
 from __future__ import annotations
 
+import contextlib
 import datetime
 import json
 import os
@@ -187,5 +188,4 @@ def _command() -> str:
 
 def folder_lock(folder, details: dict | None = None):
     """A run folder's ``FolderLock`` (``kind`` "run"), or a no-op context for a run without a folder (None)."""
-    import contextlib
     return contextlib.nullcontext() if folder is None else FolderLock(folder, "run", details)

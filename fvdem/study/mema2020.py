@@ -157,6 +157,23 @@ def _within_spread(a: list, b: list) -> str | None:
             f"({', '.join(f'{x:.3g}' for x in b)}), within {SPREAD:g} standard errors ({SPREAD * error:.3g})")
 
 
+def _untold(v, a: list, b: list, gap: float, pair: str) -> str | None:
+    """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
+    cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), or
+    within ``CLOSE`` without replicas; None where it can."""
+    spread = _within_spread(a, b)
+    if spread:
+        return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; more replicas would tell: [[points]])"
+    if gap < CLOSE and max(len(a), len(b)) < 2:
+        return f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)"
+    return None
+
+
+def _gap(a: float, b: float) -> float:
+    """The relative difference of two positive means (infinite where both are 0: nothing to tell apart)."""
+    return abs(a - b) / max(a, b) if max(a, b) > 0 else float("inf")
+
+
 TERMINAL = 0.25  # a terminal t95 within this of the paper's "about" value holds
 
 
@@ -177,12 +194,9 @@ def _compare_binarity(rows) -> dict:
     for v in common:
         a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
         values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
-        spread = _within_spread(by[v]["ar1"], by[v]["ar4_mp"])
-        if spread:
-            close.append(f"{v:g} Umf within the replicas' spread (AR-1 against AR-4 MP: {spread}; more replicas "
-                         "would tell: [[points]])")
-        elif abs(a - b) < CLOSE * max(a, b) and max(len(by[v]["ar1"]), len(by[v]["ar4_mp"])) < 2:
-            close.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
+        untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], _gap(a, b), "AR-1 against AR-4 MP")
+        if untold:
+            close.append(untold)
     rule = ("binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run; means of "
             f"the replicas apart by more than {SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without "
             "replicas: too noisy)")
@@ -238,11 +252,10 @@ def _compare(rows, faster, slower, velocities, claim):
     if not common:
         return {"finding": claim, "verdict": "open", "why": f"no velocity where both {faster} and {slower} ran"}
     values, why, faster_at = {}, [], {}
-    replicas = {f: _t95(rows, f) for f in (faster, slower)}  # read once, not per velocity
+    counted = {f: _counted(rows, f) for f in (faster, slower)}  # read once, not per velocity
     for v in common:
         (low_a, unmixed_a), (low_b, unmixed_b) = a[v], b[v]
         mean_a, mean_b = (None if unmixed_a else low_a), (None if unmixed_b else low_b)
-        n_a, n_b = len(replicas[faster][v]), len(replicas[slower][v])
         values[f"{v:g}"] = {f: (mean if mean is not None else f"> {low:.3g} ({_unmixed(rows, f, v)})")
                             for f, low, mean in ((faster, low_a, mean_a), (slower, low_b, mean_b))}
         if mean_a is not None and mean_a < low_b:
@@ -261,13 +274,9 @@ def _compare(rows, faster, slower, velocities, claim):
             why.append(f"{unmixed} not mixed by its end at {v:g} Umf: its mean t95 is only known to exceed "
                        f"{low:.3g} s, against {other:.3g} s (run it longer: [[durations]])")
             continue
-        spread = _within_spread(*(_counted(rows, f, v) for f in (faster, slower)))
-        if spread:
-            why.append(f"{v:g} Umf within the replicas' spread ({faster} against {slower}, t95 [s]: {spread}; "
-                       "more replicas would tell: [[points]])")
-            del faster_at[v]
-        elif gap < CLOSE and max(n_a, n_b) < 2:
-            why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
+        untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]")
+        if untold:
+            why.append(untold)
             del faster_at[v]
     rule = ("mean t95 of the replicas, a run not mixed by its end counted at its end (a lower bound), apart by "
             f"more than {SPREAD:g} standard errors; differences within {100 * CLOSE:.0f} % need replicas")
@@ -278,10 +287,11 @@ def _compare(rows, faster, slower, velocities, claim):
     return {"finding": claim, "verdict": "holds", "values": values, "rule": rule}
 
 
-def _counted(rows, family, v) -> list:
-    """A family's replicas' t95 at ``v``, a run not mixed by its end counted at its end (``_mean_t95``'s values)."""
-    ends = _by_velocity(rows, family, "simulated_seconds")[v]
-    return [t if t is not None else e for t, e in zip(_t95(rows, family)[v], ends)]
+def _counted(rows, family) -> dict:
+    """``{U/Umf: [t95, ...]}`` of a family's replicas, a run not mixed by its end counted at its end (None where
+    that end is unknown): the values ``_mean_t95`` averages and ``_within_spread`` spreads."""
+    t, ends = _t95(rows, family), _by_velocity(rows, family, "simulated_seconds")
+    return {v: [x if x is not None else e for x, e in zip(values, ends[v])] for v, values in t.items()}
 
 
 def _unmixed(rows, family, v) -> str:
@@ -299,13 +309,9 @@ def _mean_t95(rows, family) -> dict:
     """``{U/Umf: (mean t95 over the replicas, whether it is a lower bound)}`` of a family: a replica not mixed by
     its end counts as its end time, which makes the mean a lower bound (``check_findings`` has left out the
     runs still on their way), and a velocity with an unmixed replica of unknown end is left out."""
-    t, ends = _t95(rows, family), _by_velocity(rows, family, "simulated_seconds")
-    out = {}
-    for v, values in t.items():
-        known = [x if x is not None else e for x, e in zip(values, ends[v])]
-        if None not in known and known:
-            out[v] = (sum(known) / len(known), None in values)
-    return out
+    t = _t95(rows, family)
+    return {v: (sum(known) / len(known), None in t[v]) for v, known in _counted(rows, family).items()
+            if known and None not in known}
 
 
 SLIGHT = 0.2  # "only a slight effect": mean t95s within this fraction of MP's
@@ -413,12 +419,9 @@ def _expansion(rows) -> dict:
     for v in common:
         ma, mb = sum(a[v]) / len(a[v]), sum(b[v]) / len(b[v])
         values[f"{v:g}"] = {"ar4_mp": a[v], "ar1": b[v]}
-        spread = _within_spread(a[v], b[v])
-        if spread:
-            why.append(f"{v:g} Umf within the replicas' spread (AR-4 MP against AR-1: {spread}; more replicas "
-                       "would tell: [[points]])")
-        elif abs(ma - mb) < CLOSE * max(ma, mb) and max(len(a[v]), len(b[v])) < 2:
-            why.append(f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)")
+        untold = _untold(v, a[v], b[v], _gap(ma, mb), "AR-4 MP against AR-1")
+        if untold:
+            why.append(untold)
     rule = (f"mean bed expansion (bed_top from {WINDOW_START:g} s after the inlet ramp for {WINDOW:g} s, over "
             f"its settled value) of AR-4 MP above AR-1's at every velocity both ran, the means apart by more than "
             f"{SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without replicas: too noisy)")

@@ -32,12 +32,12 @@ def study_status(out) -> dict:
     out = Path(out)
     index = json.loads((out / "study.json").read_text())
     chosen = report_for(index.get("report"))
-    runs = [_run_status(out, r, chosen) for r in index["runs"]]
+    rows = [_run_status(out, r, chosen) for r in index["runs"]]
+    runs = [row for row, _ in rows]
     families = {}
-    for row in runs:
+    for row, measured in rows:
         family = families.setdefault(row["family"], {"cpu_seconds": 0.0, "simulated": 0.0, "runs_measured": 0,
                                                      "peak_memory_mb": None, "left_simulated_seconds": 0.0})
-        measured = row.pop("_cpu_measured")
         if measured is not None:
             family["cpu_seconds"] += measured[0]
             family["simulated"] += measured[1]
@@ -66,12 +66,12 @@ def study_status(out) -> dict:
                                      else None)}
 
 
-def _run_status(out: Path, r: dict, chosen) -> dict:
-    """One run's row (``study_status``), with the CPU seconds and simulated seconds its summary measured under
-    ``_cpu_measured`` (None without; taken out by the caller)."""
+def _run_status(out: Path, r: dict, chosen) -> tuple:
+    """One run's row (``study_status``), and the CPU seconds and simulated seconds its summary measured (None
+    without), which the family's rate sums."""
     folder = Path(r["folder"]) if Path(r["folder"]).is_absolute() else out / r["folder"]
     summary = _summary(folder) or {}
-    series = _series(folder) if (folder / "timeseries.csv").exists() else None
+    series = _series(folder)
     held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
     duration = r.get("duration")
     at_end = bool(summary) and not summary.get("stopped_early") and (
@@ -104,9 +104,8 @@ def _run_status(out: Path, r: dict, chosen) -> dict:
            "cpu_per_simulated_second": cpu / measured if cpu and measured > 0 else None,
            "peak_memory_mb": summary.get("peak_memory_mb"),
            **({"error": r.get("error")} if state == "failed" else {}),
-           **({"writer": writer} if writer else {}),
-           "_cpu_measured": (float(cpu), measured) if cpu and measured > 0 else None}
-    return row
+           **({"writer": writer} if writer else {})}
+    return row, ((float(cpu), measured) if cpu and measured > 0 else None)
 
 
 def format_status(status: dict) -> str:

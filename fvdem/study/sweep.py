@@ -83,8 +83,7 @@ def study_from_table(table: dict, path, out) -> Study:
                  f"{', '.join(sorted(REPORTS))}")
         report = DEFAULT_REPORT
     duration = table.get("duration")
-    if not isinstance(duration, (int, float)) or isinstance(duration, bool) or not 0 < duration < 1e6:
-        _problem(problems, "duration", duration, "a number of simulated seconds > 0")
+    _seconds(duration, "duration", problems)
     replicas = _replicas(table, "replicas", 1, problems)
     settings = _table(table, "settings", problems)
     axes = _table(table, "axes", problems)
@@ -166,9 +165,7 @@ def study_from_table(table: dict, path, out) -> Study:
             _problem(problems, f"families.{family}.bed", bed, "the name of one of the study's beds (a string)")
             bed = None
         family_duration = spec.get("duration", duration)
-        if "duration" in spec and (not isinstance(family_duration, (int, float)) or isinstance(family_duration, bool)
-                                   or not 0 < family_duration < 1e6):
-            _problem(problems, f"families.{family}.duration", family_duration, "a number of simulated seconds > 0")
+        if "duration" in spec and not _seconds(family_duration, f"families.{family}.duration", problems):
             family_duration = duration
         if bed is not None and bed not in bed_names:
             _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
@@ -234,18 +231,12 @@ def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, pr
     allowed = {"family", *keys, *axes}
     for k, spec in enumerate(tables):
         where = f"{name}[{k}]"
-        values, bad = {}, False
-        if "duration" in spec:
-            seconds = spec["duration"]
-            if not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or not 0 < seconds < 1e6:
-                _problem(problems, f"{where}.duration", seconds, "a number of simulated seconds > 0")
-                bad = True
-            else:
-                values["duration"] = float(seconds)
+        values, found = {}, len(problems)
+        if "duration" in spec and _seconds(spec["duration"], f"{where}.duration", problems):
+            values["duration"] = float(spec["duration"])
         if "replicas" in spec and "replicas" in keys:
-            count = _replicas(spec, f"{where}.replicas", 1, problems)
-            bad = bad or count != spec["replicas"]
-            values["replicas"] = count
+            values["replicas"] = _replicas(spec, f"{where}.replicas", 1, problems)
+        bad = len(problems) > found
         selectors = {key: wanted for key, wanted in spec.items() if key not in keys}
         for key, wanted in selectors.items():
             known = list(families) if key == "family" else axes.get(key)
@@ -265,6 +256,14 @@ def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, pr
                 _matches(key, wanted, family if key == "family" else point.get(key))
                 for key, wanted in selectors.items())), values))
     return out
+
+
+def _seconds(value, path: str, problems) -> bool:
+    """Whether ``value`` is a number of simulated seconds (0 < value < 1e6); else a problem at ``path``."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < 1e6:
+        return True
+    _problem(problems, path, value, "a number of simulated seconds > 0")
+    return False
 
 
 def _replicas(table: dict, path: str, default: int, problems) -> int:
