@@ -119,3 +119,32 @@ def test_run_labels_tell_folders_of_the_same_name_apart(tmp_path):
     from fvdem.analysis.plots import run_labels
     assert run_labels([tmp_path / "a" / "demo", tmp_path / "b" / "demo"]) == ["a/demo", "b/demo"]
     assert run_labels([tmp_path / "x", tmp_path / "y"]) == ["x", "y"]
+
+
+def test_random_mixture_entropy_limits_of_small_and_large_cells():
+    """Cells of one particle: 0 whatever the colours; of two at p = 1/2: (1/2) ln 2 / ln 2 = 1/2; of n >> 1:
+    the second-order expansion 1 - 1 / (2 n ln 2) (its next term is O(1 / n^2))."""
+    from fvdem.analysis.mixing import random_mixture_entropy
+    one = np.array([[0.01 + 0.03 * i, 0.01, 0.01] for i in range(4)])
+    assert random_mixture_entropy(one, np.array([0, 1, 0, 1]), LOWER, UPPER) == 0.0
+    two = np.array([[0.01, 0.01, 0.01]] * 2 + [[0.04, 0.01, 0.01]] * 2)
+    assert random_mixture_entropy(two, np.array([0, 1, 1, 0]), LOWER, UPPER) == pytest.approx(0.5, rel=1e-12)
+    for n in (100, 400):
+        cell = np.tile([[0.01, 0.01, 0.01]], (n, 1))
+        value = random_mixture_entropy(cell, np.arange(n) % 2, LOWER, UPPER)
+        assert value == pytest.approx(1 - 1 / (2 * n * np.log(2)), abs=2 / n ** 2)
+    assert np.isnan(random_mixture_entropy(np.empty((0, 3)), np.empty(0, int), LOWER, UPPER))
+
+
+def test_random_mixture_entropy_against_shuffled_colours():
+    """The exact expectation against the mean entropy of the same bed with its colours shuffled 200 times
+    (a Monte Carlo estimate, independent of the binomial sum), cells of ~23 particles; p = 0.3 as well."""
+    from fvdem.analysis.mixing import random_mixture_entropy
+    position = _bed(20000, height=0.84)
+    rng = np.random.default_rng(3)
+    for share in (0.5, 0.3):
+        colour = (rng.random(len(position)) < share).astype(int)
+        exact = random_mixture_entropy(position, colour, LOWER, UPPER)
+        draws = [mixing_entropy(position, rng.permutation(colour), LOWER, UPPER) for _ in range(200)]
+        assert exact == pytest.approx(np.mean(draws), abs=3 * np.std(draws) / np.sqrt(len(draws)))
+        assert exact < 0.99  # the ceiling is visibly below 1 at this cell size

@@ -7,7 +7,9 @@ the fully mixed value ``S0 = ln 2``:
 
     S_tot = (1 / ln 2) sum_cells S N_cell / N          (0: segregated, 1: perfectly mixed)
 
-The mixing time ``t95`` is the first time ``S_tot`` reaches 0.95. The Lacey index
+The mixing time ``t95`` is the first time ``S_tot`` reaches 0.95. A bed whose colours are shuffled at random
+does not reach 1 on a finite grid: a cell of ``n`` particles holds a binomial sample, whose entropy falls short
+of ln 2 by about ``1 / (2 n)``. ``random_mixture_entropy`` is that ceiling for the particles where they are. The Lacey index
 ``M = (s0^2 - s^2) / (s0^2 - sR^2)`` compares the variance ``s^2`` of the colour-1 fraction over
 the occupied cells (weighted by their particle counts) with the fully segregated ``s0^2 = p (1 - p)``
 and the random-mixture ``sR^2 = p (1 - p) / n`` (``n`` the mean particles per occupied cell).
@@ -30,15 +32,21 @@ def _cell_counts(position, colour, lower, upper, cells):
     return total, ones
 
 
+def _binary_entropy(x):
+    """``-x ln x - (1 - x) ln(1 - x)`` elementwise (0 ln 0 = 0) [nats]."""
+    x1 = np.asarray(x, float)
+    x0 = 1.0 - x1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return -np.where(x1 > 0, x1 * np.log(x1), 0.0) - np.where(x0 > 0, x0 * np.log(x0), 0.0)
+
+
 def mixing_indices(position, colour, lower, upper, cells=(5, 5, 35)):
     """``(S_tot, Lacey index)`` of particles with colours 0/1 from one binning into the analysis grid."""
     total, ones = _cell_counts(position, colour, lower, upper, cells)
     occupied = total > 0
     n_cell = total[occupied]
     x1 = ones[occupied] / n_cell
-    x0 = 1.0 - x1
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = -np.where(x1 > 0, x1 * np.log(x1), 0.0) - np.where(x0 > 0, x0 * np.log(x0), 0.0)
+    s = _binary_entropy(x1)
     entropy = float((s * n_cell).sum() / total.sum() / np.log(2.0))
     p = ones.sum() / total.sum()
     if p in (0.0, 1.0):
@@ -57,6 +65,31 @@ def mixing_entropy(position, colour, lower, upper, cells=(5, 5, 35)) -> float:
 def lacey_index(position, colour, lower, upper, cells=(5, 5, 35)) -> float:
     """Lacey mixing index (0 segregated, 1 random mixture) on the same analysis grid."""
     return mixing_indices(position, colour, lower, upper, cells)[1]
+
+
+def random_mixture_entropy(position, colour, lower, upper, cells=(5, 5, 35)) -> float:
+    """The expected S_tot of the same particles, where they are, with their colours shuffled at random:
+    the highest value a bed can be expected to reach on this grid (a perfect random mixture, not the
+    ordered 1).
+
+        S_random = (1 / ln 2) sum_cells (N_cell / N) E[S(K / N_cell)],   K ~ Binomial(N_cell, p)
+
+    with ``p`` the bed's colour-1 fraction (the binomial is the sampling of a large bed; shuffling a
+    finite one is hypergeometric, a relative difference of order 1 / N). Dimensionless: 0 when each
+    cell holds one particle, 0.5 for cells of two at p = 1/2, about ``1 - 1 / (2 n ln 2)`` for cells of
+    ``n`` >> 1 at p = 1/2 (0.95 needs about 15 particles per cell). NaN for an empty bed."""
+    from scipy.stats import binom
+    total, ones = _cell_counts(position, colour, lower, upper, cells)
+    count = total.sum()
+    if count == 0:
+        return float("nan")
+    p = ones.sum() / count
+    sizes, cells_of_size = np.unique(total[total > 0], return_counts=True)
+    expected = 0.0
+    for n, m in zip(sizes, cells_of_size):
+        k = np.arange(n + 1)
+        expected += m * n * float(np.sum(binom.pmf(k, n, p) * _binary_entropy(k / n)))
+    return float(expected / count / np.log(2.0))
 
 
 def mixing_time(times, entropy, level: float = MIXED):

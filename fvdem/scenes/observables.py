@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..analysis.bed import bed_top, bed_weight_per_area, packed_bed_summary
-from ..analysis.mixing import MIXED, mixing_indices, mixing_time
+from ..analysis.mixing import MIXED, mixing_indices, mixing_time, random_mixture_entropy
 from .base import Observable
 
 
@@ -93,7 +93,9 @@ def mixing_cells(case) -> tuple:
 
 class Mixing(Observable):
     """Mixing entropy and Lacey index of two colours on the ``mixing_cells`` grid; the summary adds
-    the mixing time t95 (entropy first at 0.95; None while not reached)."""
+    the mixing time t95 (entropy first at 0.95; None while not reached) and the entropy the final bed
+    would have with its colours shuffled at random (``mixing_entropy_random``: how close to 1 this grid
+    lets a mixed bed come)."""
 
     name = "mixing"
     plots = ("mixing",)
@@ -117,7 +119,9 @@ class Mixing(Observable):
 
     def summary(self, model, values, history, run):
         rows = np.asarray(history, float).reshape(-1, 2)
+        p, d = model.particles, model.case.domain
         return {"mixing_entropy": values["mixing_entropy"], "lacey_index": values["lacey_index"],
+                "mixing_entropy_random": random_mixture_entropy(p.position, p.colour, d.lower, d.upper, self.cells),
                 "mixing_cells": list(self.cells), "t95": mixing_time(rows[:, 0], rows[:, 1]) if len(rows) else None}
 
     def ends(self, model, values, history):

@@ -531,8 +531,9 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     window (a channel's mark: 3.1-3.5 in AR-1's beds at 1.6-2.9 Umf, 5.5-5.8 in AR-4 MP's at 1.6, 8 there from
     8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed), over the same
     window the share of the rising gas in the corner and wall columns of the lower bed and the rods' mean |a_z|
-    inside and in the corners (``channel_record``), the mixing entropy at the end and the void fractions'
-    binarity."""
+    inside and in the corners (``channel_record``), the mixing entropy at the end and the one its bed would
+    have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), and the
+    void fractions' binarity."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
     gas = _gas(folder)
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
@@ -550,6 +551,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
             **(_channel_means(folder, ramp) if r["status"] != FAILED else {}),
             "final_mixing_entropy": (float(series["mixing_entropy"][-1])
                                      if series is not None and "mixing_entropy" in series else None),
+            "mixing_entropy_random": data.get("mixing_entropy_random"),
             "void_fraction_binarity": None if record is None else record["binarity"]}
 
 
@@ -637,5 +639,5 @@ register_report(StudyReport(
     archived_columns=("mixing_entropy", "lacey_index", "pressure_drop_over_weight", "bed_pressure_drop", "bed_top",
                       "rms_speed", "max_overlap_over_diameter", "gas_max_speed"),
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",
-                      "bed_height", "mixing_cells"),
+                      "bed_height", "mixing_cells", "mixing_entropy_random"),
     archive_extra=_archive_extra, watch=("mixing_entropy",)))
