@@ -18,8 +18,10 @@
 # Extra arguments go to fvdem study: after a setting of the study file changed, run it once as
 # `studies/campaign.sh --supersede` (the runs of the old setting move to superseded/, nothing is deleted).
 # Two runs at a time, one numba thread each (more threads than free cores stall OpenMP: docs/benchmarks.md).
-# Stage 1 (studies/mema2020_stage1.toml) has ended; docs/data/mema2020_stage1 holds all its runs (its
-# folder comes back with: fvdem study studies/mema2020_stage1.toml --out DIR --restore docs/data/mema2020_stage1).
+# Stage 1 (studies/mema2020_stage1.toml) runs beside it, one run at a time, while it has runs left (since
+# 2026-12-04 its AR-4 MP run with the stiffer spring; its ended runs come back from docs/data/mema2020_stage1 and
+# are skipped; once all have ended it exits at once). Where it stands: fvdem study ~/fvdem-runs/mema2020_stage1
+# --status; archive: --archive docs/data/mema2020_stage1.
 # Timing anything else while it runs: pause the whole campaign (kill -STOP -- -<its process group>, then
 # -CONT). Dask's scheduler restarts a worker that has not sent a heartbeat for its worker-ttl (default 5 min),
 # killing its run back to the last checkpoint; that happened once after a series of pauses (2026-12-03), so
@@ -29,5 +31,10 @@ cd "$(dirname "$0")/.."
 export DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL="${DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL:-1 hour}"
 [ -x .venv/bin/fvdem ] || make venv
 OUT=${FVDEM_RUNS:-$HOME/fvdem-runs}
+.venv/bin/fvdem study studies/mema2020_stage1.toml --out "$OUT/mema2020_stage1" --workers 1 \
+    --restore docs/data/mema2020_stage1 &
 .venv/bin/fvdem study studies/mema2020_stage2.toml --out "$OUT/mema2020_stage2" --workers 2 \
     --restore docs/data/mema2020 "$@"
+status=$?
+wait
+exit $status
