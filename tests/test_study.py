@@ -221,9 +221,11 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     entropy = np.minimum(1.0, t / 2.0)
     top = 0.3 + 0.05 * np.sin(3.0 * t)
     fastest = 12.0 + 4.0 * t
-    (folder / "timeseries.csv").write_text("time,mixing_entropy,pressure_drop_over_weight,bed_top,gas_max_speed\n"
-                                           + "".join(f"{a},{b},{c},{d},{e}\n"
-                                                     for a, b, c, d, e in zip(t, entropy, drop, top, fastest)))
+    overlap = 0.04 + 0.001 * np.arange(len(t))  # 0.04 ... 0.07, then one impact
+    overlap[17] = 0.3
+    (folder / "timeseries.csv").write_text(
+        "time,mixing_entropy,pressure_drop_over_weight,bed_top,gas_max_speed,max_overlap_over_diameter\n"
+        + "".join(f"{a},{b},{c},{d},{e},{f}\n" for a, b, c, d, e, f in zip(t, entropy, drop, top, fastest, overlap)))
     (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": [
         {"name": "ar1_2.9", "family": "ar1", "status": "stopped", "folder": str(folder), "t95": None,
          "point": {"gas.u_over_umf": 2.9}}]}))
@@ -240,6 +242,9 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     assert row["bed_expansion"] == pytest.approx(np.mean(top[window]) / 0.3)  # over the bed it started as
     # the largest cell gas speed over the inlet velocity (2.9 x 1.58 m/s), over the same window: channels
     assert row["gas_max_speed_over_inlet"] == pytest.approx(np.mean(fastest[window]) / (2.9 * 1.58))
+    # the contacts' depth over the whole run: the impact is its largest, not its median or 99th percentile
+    assert row["overlap_max"] == 0.3 and row["overlap_median"] == pytest.approx(0.055)  # the 16th of 31
+    assert row["overlap_p99"] == pytest.approx(np.percentile(overlap, 99)) and row["overlap_p99"] < 0.3
     # runs of different lengths (8 s; ended at 5.5 s, 2 s past t95) over one window: a bed rising slowly
     # stands as high in both (over their second halves it would not: 6 s against 4.1 s)
     from fvdem.study.mema2020 import _bed_surface

@@ -532,8 +532,8 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed), over the same
     window the share of the rising gas in the corner and wall columns of the lower bed and the rods' mean |a_z|
     inside and in the corners (``channel_record``), the mixing entropy at the end and the one its bed would
-    have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), and the
-    void fractions' binarity."""
+    have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), the
+    void fractions' binarity and the largest overlap's median, 99th percentile and maximum (``_overlaps``)."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
     gas = _gas(folder)
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
@@ -552,7 +552,20 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
             "final_mixing_entropy": (float(series["mixing_entropy"][-1])
                                      if series is not None and "mixing_entropy" in series else None),
             "mixing_entropy_random": data.get("mixing_entropy_random"),
-            "void_fraction_binarity": None if record is None else record["binarity"]}
+            "void_fraction_binarity": None if record is None else record["binarity"], **_overlaps(series)}
+
+
+def _overlaps(series) -> dict:
+    """The contacts' depth over the whole run, from the largest overlap in the bed at each sample (fraction of
+    a diameter): its median, 99th percentile and largest (``overlap_median``, ``overlap_p99``, ``overlap_max``;
+    None without the column). The spring's softness at a glance: the defaults were chosen on 5.4 % (AR-1) and
+    7.2 % (AR-4) in 2,000-particle beds (docs/speed-accuracy.md); single samples far above them are impacts."""
+    import numpy as np
+    keys = ("overlap_median", "overlap_p99", "overlap_max")
+    if series is None or "max_overlap_over_diameter" not in series:
+        return dict.fromkeys(keys)
+    values = np.asarray(series["max_overlap_over_diameter"], float)
+    return dict(zip(keys, (float(np.median(values)), float(np.percentile(values, 99)), float(values.max()))))
 
 
 CHANNELS = "channels.json"  # an archived run's channel record (``channel_record``)
