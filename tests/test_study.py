@@ -284,9 +284,19 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert against["verdict"] == "does not hold"
     late = check_findings([row("ar1", 2.0, 7.0), unmixed("ar4_mp", 2.0, 6.0, 0.9)])[0]
     assert late["verdict"] == "open"  # mixed after the other's end: nothing follows
+    # neither mixed by the same end: the higher mixing entropy there mixes faster (the paper's Figs. 3 and 9 a),
+    # by the same rules: 16 % apart without replicas tells; replicas within their spread, or ends that differ, do not
     neither = check_findings([unmixed("ar1", 2.0, 6.0, 0.79), unmixed("ar4_mp", 2.0, 6.0, 0.943)])[0]
-    assert neither["verdict"] == "open"
+    assert neither["verdict"] == "holds"
     assert neither["values"]["2"]["mixing_entropy_at_end"] == {"ar4_mp": [0.943], "ar1": [0.79]}
+    behind = check_findings([unmixed("ar1", 2.0, 6.0, 0.943), unmixed("ar4_mp", 2.0, 6.0, 0.79)])[0]
+    assert behind["verdict"] == "does not hold"
+    spread = check_findings([unmixed("ar1", 2.0, 20.0, 0.93), unmixed("ar4_mp", 2.0, 20.0, 0.946),
+                             unmixed("ar4_mp", 2.0, 20.0, 0.852)])[0]  # means 0.899 against 0.93: within spread
+    assert spread["verdict"] == "open" and "replicas' spread (neither mixed: ar4_mp against ar1, mixing " \
+        "entropy at their end, 20 s" in spread["why"]
+    uneven = check_findings([unmixed("ar1", 2.0, 8.0, 0.79), unmixed("ar4_mp", 2.0, 6.0, 0.943)])[0]
+    assert uneven["verdict"] == "open" and "their ends differ (too short)" in uneven["why"]
     # replicas, one not mixed by the paper's 20 s: the family's mean t95 is bounded below by counting that run at
     # its end. AR-1 at 16.5 and 17.3 s (mean 16.9): AR-4 MP at > 20 and 19.5 s has a mean above 19.75, slower
     # (decided: 2.85 s apart, beyond twice the standard error of the difference, 0.94 s); at > 20 and 15 s
