@@ -335,6 +335,20 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert mixed_up["verdict"] == "does not hold"
 
 
+def test_replicas_all_counted_at_one_end_have_an_unknown_spread_not_none():
+    """Two AR-4 MP replicas both unmixed by 20 s (counted at 20, 20: sample variance 0) against one drag-only run
+    mixed at 19.8 s: the error of the difference is not 0 (which would tell a 1 % gap); each side takes the
+    other's variance, and where neither has one the 10 % rule decides."""
+    from fvdem.study.mema2020 import _within_spread
+    assert _within_spread([20.0, 20.0], [19.8]) == "means 20 (20, 20) against 19.8 (19.8), within 10 % and no " \
+        "spread known"
+    assert _within_spread([20.0, 20.0], [15.0]) is None  # 25 % apart: told
+    # a spread on one side serves both: 16.5, 17.3 (sample variance 0.32) against 20, 20: error
+    # sqrt(0.32 / 2 + 0.32 / 2) = 0.566, so 3.1 s apart is told and 0.9 s is not
+    assert _within_spread([20.0, 20.0], [16.5, 17.3]) is None
+    assert "within 2 standard errors (1.13)" in _within_spread([18.0, 18.0], [16.5, 17.3])
+
+
 def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expansion_findings():
     from fvdem.study import check_findings
 

@@ -142,19 +142,23 @@ def _within_spread(a: list, b: list) -> str | None:
     """Whether two families' replica values at one velocity (a run not mixed by its end counted at its end) lie
     within their spread, where either has replicas: the difference of the means within ``SPREAD`` standard
     errors of it, ``sqrt(var_a / n_a + var_b / n_b)`` with each family's sample variance (a family of one run
-    takes the other's: the same chaos). More replicas shrink the error, so an order that exists is told in the
+    takes the other's: the same chaos; so does a family whose variance is 0, its replicas all unmixed and
+    counted at the same end, where the spread is unknown, not absent). More replicas shrink the error, so an order that exists is told in the
     end. Returns the means and the bound as text, or None where the difference is beyond it, or neither family
     has replicas (the ``CLOSE`` rule then)."""
     if max(len(a), len(b)) < 2:
         return None
     means = [sum(v) / len(v) for v in (a, b)]
     var = [sum((x - m) ** 2 for x in v) / (len(v) - 1) if len(v) > 1 else None for v, m in zip((a, b), means)]
-    var = [x if x is not None else y for x, y in zip(var, reversed(var))]
+    var = [x if x else y for x, y in zip(var, reversed(var))]  # none or 0 (replicas all counted at one end): unknown
+    told = (f"means {means[0]:.3g} ({', '.join(f'{x:.3g}' for x in a)}) against {means[1]:.3g} "
+            f"({', '.join(f'{x:.3g}' for x in b)})")
+    if not all(var):  # no spread known on either side: the CLOSE rule
+        return None if _gap(*means) >= CLOSE else f"{told}, within {100 * CLOSE:.0f} % and no spread known"
     error = (var[0] / len(a) + var[1] / len(b)) ** 0.5
     if abs(means[0] - means[1]) > SPREAD * error:
         return None
-    return (f"means {means[0]:.3g} ({', '.join(f'{x:.3g}' for x in a)}) against {means[1]:.3g} "
-            f"({', '.join(f'{x:.3g}' for x in b)}), within {SPREAD:g} standard errors ({SPREAD * error:.3g})")
+    return f"{told}, within {SPREAD:g} standard errors ({SPREAD * error:.3g})"
 
 
 def _untold(v, a: list, b: list, gap: float, pair: str) -> str | None:
