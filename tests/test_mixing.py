@@ -148,3 +148,13 @@ def test_random_mixture_entropy_against_shuffled_colours():
         draws = [mixing_entropy(position, rng.permutation(colour), LOWER, UPPER) for _ in range(200)]
         assert exact == pytest.approx(np.mean(draws), abs=3 * np.std(draws) / np.sqrt(len(draws)))
         assert exact < 0.99  # the ceiling is visibly below 1 at this cell size
+
+
+def test_colour_by_layer_counts_each_slab_by_centre():
+    """Three layers of 0.35 m: two particles in the lowest (one of each colour), one colour-1 in the middle,
+    none in the top (NaN); a centre below the column counts in the lowest layer, as in the mixing grid."""
+    from fvdem.analysis.mixing import colour_by_layer
+    position = np.array([[0.1, 0.1, 0.1], [0.1, 0.1, -0.01], [0.1, 0.1, 0.5]])
+    count, fraction = colour_by_layer(position, np.array([0, 1, 1]), LOWER, UPPER, 3)
+    assert count.tolist() == [2, 1, 0]
+    assert fraction[:2].tolist() == [0.5, 1.0] and np.isnan(fraction[2])

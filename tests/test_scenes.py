@@ -61,10 +61,45 @@ def test_report_draws_what_the_scene_declares(tmp_path):
     from fvdem.scenes import plots_of
     out = tmp_path / "demo"
     fvdem.Simulation(case_of("demo"), out, threads=1).run()
-    assert plots_of(out) == ("timeseries", "colours", "orientation", "gas_profile", "void_fraction", "mixing")
+    assert plots_of(out) == ("timeseries", "colours", "orientation", "gas_profile", "void_fraction", "mixing",
+                             "colour_layers")
     written = sorted(p.name for p in report(out, plots_of(out)))
     # spheres: no orientation plot
-    assert written == ["colours.png", "gas_profile.png", "mixing.png", "timeseries.png", "void_fraction.png"]
+    assert written == ["colour_layers.png", "colours.png", "gas_profile.png", "mixing.png", "timeseries.png",
+                       "void_fraction.png"]
+
+
+def test_the_colour_by_layer_from_snapshots_and_from_its_archived_record_is_the_same(tmp_path):
+    """The colour-1 fraction by layer of a run's particle snapshots: the last snapshot's layers agree with its
+    final state binned directly (the mixing grid's layers over the column); an archive keeps the record as
+    JSON without the snapshots, and the report draws the same chart from it."""
+    import json
+    import shutil
+
+    import numpy as np
+    import fvdem
+    from fvdem.analysis.mixing import colour_by_layer, mixing_cells
+    from fvdem.analysis.plots import COLOUR_LAYERS, report
+    from fvdem.scenes.observables import colour_layer_record
+    out = tmp_path / "demo"
+    case = case_of("demo")
+    fvdem.Simulation(case, out, threads=1).run()
+    record = colour_layer_record(out)
+    with np.load(out / "final_state.npz") as state:
+        layers = mixing_cells(case)[2]
+        count, fraction = colour_by_layer(state["position"], state["colour"], case.domain.lower, case.domain.upper,
+                                          layers)
+    kept = len(record["count"][-1])
+    assert record["count"][-1] == count[:kept].tolist() and not count[kept:].any()
+    assert record["fraction"][-1] == [None if np.isnan(x) else round(float(x), 4) for x in fraction[:kept]]
+    assert record["layer_height"] == pytest.approx((case.domain.upper[2] - case.domain.lower[2]) / layers)
+    archived = tmp_path / "archived"
+    archived.mkdir()
+    for name in ("case.toml", "timeseries.csv"):
+        shutil.copy(out / name, archived / name)
+    (archived / COLOUR_LAYERS).write_text(json.dumps(record))
+    assert colour_layer_record(archived) == record
+    assert [p.name for p in report(archived, ("colour_layers",))] == ["colour_layers.png"]
 
 
 def test_the_vertical_momentum_column_is_the_particles_momentum_against_gravity(tmp_path):

@@ -160,6 +160,40 @@ def plot_mixing(runs, path, level=MIXED) -> Path:
     return _save(fig, Path(path))
 
 
+COLOUR_LAYERS = "colour_layers.json"  # an archived run's colour by layer (``scenes.observables.colour_layer_record``)
+FEW = 20  # particles: a layer with fewer is left blank on the chart (a few particles thrown up, not a bed)
+
+
+def plot_colour_layers(out, record: dict) -> Path:
+    """Where the bed is still unmixed: the colour-1 fraction by layer (the mixing grid's height) against time,
+    from a record of the particle snapshots (``fvdem.scenes.observables.colour_layer_record``), 0.5 white;
+    layers of fewer than ``FEW`` particles blank; t95 dotted where the run mixed."""
+    from matplotlib.colors import TwoSlopeNorm
+
+    from .mixing import mixing_time
+    plt = _pyplot()
+    times = np.asarray(record["times"], float)
+    fraction = np.array([[np.nan if x is None else x for x in row] for row in record["fraction"]], float)
+    fraction[np.asarray(record["count"]) < FEW] = np.nan
+    step = np.diff(times).min() if len(times) > 1 else 1.0
+    edges_t = np.concatenate([times - 0.5 * step, [times[-1] + 0.5 * step]])
+    edges_z = record["z_lower"] + record["layer_height"] * np.arange(fraction.shape[1] + 1)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    mesh = ax.pcolormesh(edges_t, edges_z, np.ma.masked_invalid(fraction.T), cmap="coolwarm",
+                         norm=TwoSlopeNorm(0.5, 0.0, 1.0), shading="flat")
+    fig.colorbar(mesh, ax=ax, label="colour-1 fraction")
+    if (Path(out) / "timeseries.csv").exists():
+        ts = read_timeseries(out)
+        t95 = mixing_time(ts["time"], ts["mixing_entropy"]) if "mixing_entropy" in ts else None
+        if t95 is not None:
+            ax.axvline(t95, color="k", ls=":", lw=1, label=f"t95 = {t95:.2f} s")
+            ax.legend(fontsize=8, loc="upper right")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("height of the layer [m]")
+    ax.set_title(f"colour by layer, {Path(out).name}", fontsize=9)
+    return _save(fig, Path(out) / "colour_layers.png")
+
+
 def mixing_times(runs, level=MIXED, names=None) -> dict:
     """``{name: [(U/Umf, t95 or None, simulated end), ...]}`` of run folders (their case.toml and
     timeseries.csv), sorted by U/Umf (runs at the same U/Umf, such as replicas, by t95, unmixed last):

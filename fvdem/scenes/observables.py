@@ -2,10 +2,14 @@
 the mixing of two colours, the gas-particle exchange and a column's pressure drop over the bed weight."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from ..analysis.bed import bed_top, bed_weight_per_area, packed_bed_summary
-from ..analysis.mixing import MIXED, mixing_indices, mixing_time, random_mixture_entropy
+from ..analysis.mixing import MIXED, colour_by_layer, mixing_cells, mixing_indices, mixing_time, random_mixture_entropy
+from ..analysis.plots import COLOUR_LAYERS, PLOTS, plot_colour_layers, read_timeseries
+from ..io.vtk import read_pvd
 from .base import Observable
 
 
@@ -81,16 +85,6 @@ class Gas(Observable):
         return out
 
 
-def mixing_cells(case) -> tuple:
-    """The mixing-entropy grid: ``output.mixing_cells``, else half the gas grid (the paper's 5 x 5 x 35 on
-    10 x 10 x 70), else 5 x 5 x 35."""
-    if case.output.mixing_cells is not None:
-        return tuple(case.output.mixing_cells)
-    if case.gas.enabled:
-        return tuple(max(1, n // 2) for n in case.gas.cells)
-    return (5, 5, 35)
-
-
 class Mixing(Observable):
     """Mixing entropy and Lacey index of two colours on the ``mixing_cells`` grid; the summary adds
     the mixing time t95 (entropy first at 0.95; None while not reached) and the entropy the final bed
@@ -98,7 +92,7 @@ class Mixing(Observable):
     lets a mixed bed come)."""
 
     name = "mixing"
-    plots = ("mixing",)
+    plots = ("mixing", "colour_layers")
     keeps_history = True
 
     def __init__(self, case):
@@ -190,3 +184,51 @@ class BedPressure(Observable):
         mean = float(late[:, 1].mean())
         return {"bed_pressure_drop_mean_second_half": mean, "bed_pressure_drop_std_second_half": float(late[:, 1].std()),
                 "pressure_drop_over_weight": mean / weight_per_area(model), "pressure_samples_second_half": int(len(late))}
+
+
+def colour_layer_record(out) -> dict | None:
+    """Per particle snapshot of a run, the particles and the colour-1 fraction in horizontal layers of the
+    mixing grid's height (``colour_by_layer``; its vertical cells, from the case), up to the highest layer
+    any snapshot reaches: ``{"z_lower", "layer_height", "times", "count", "fraction"}`` (fractions to 4 digits,
+    None in an empty layer). From the snapshots, else from an archived ``colour_layers.json``; None without
+    either, or without colours."""
+    import json
+
+    import meshio
+
+    from ..case import CaseError, load_case
+    out = Path(out)
+    snapshots = [(t, name) for t, name in read_pvd(out / "particles.pvd") if (out / name).exists()]
+    if not snapshots:
+        stored = out / COLOUR_LAYERS
+        return json.loads(stored.read_text()) if stored.exists() else None
+    try:
+        case = load_case(out / "case.toml")
+    except (CaseError, OSError):
+        return None
+    layers = mixing_cells(case)[2]
+    lower, upper = case.domain.lower, case.domain.upper
+    times, counts, fractions = [], [], []
+    for t, name in snapshots:
+        state = meshio.read(out / name)
+        if "colour" not in state.point_data or not len(state.points):
+            return None
+        count, fraction = colour_by_layer(state.points, state.point_data["colour"], lower, upper, layers)
+        times.append(t)
+        counts.append(count)
+        fractions.append(fraction)
+    kept = int(max(np.nonzero(c)[0].max() for c in counts)) + 1
+    return {"z_lower": float(lower[2]), "layer_height": (float(upper[2]) - float(lower[2])) / layers, "times": times,
+            "count": [c[:kept].tolist() for c in counts],
+            "fraction": [[None if np.isnan(x) else round(float(x), 4) for x in f[:kept]] for f in fractions]}
+
+
+def _has_colour_layers(out) -> bool:
+    """Two colours (the run measured their mixing) and particle snapshots, or an archived colour-layer record."""
+    if not (out / "timeseries.csv").exists() or "mixing_entropy" not in read_timeseries(out):
+        return False
+    return len(read_pvd(out / "particles.pvd")) > 1 or (out / COLOUR_LAYERS).exists()
+
+
+# Mixing's chart of where the bed is still unmixed (a record of the snapshots, so drawn here, above fvdem.io)
+PLOTS["colour_layers"] = (lambda out: plot_colour_layers(out, colour_layer_record(out)), _has_colour_layers)

@@ -9,7 +9,9 @@ import json
 import math
 from pathlib import Path
 
+from ..analysis.plots import COLOUR_LAYERS
 from ..case import CaseError, load_case
+from ..scenes.observables import colour_layer_record
 from .reports import StudyReport, register_report
 from .tasks import ENDED, FAILED, IN_PROGRESS
 
@@ -661,13 +663,17 @@ def _channel_means(folder: Path, ramp: float | None) -> dict:
 
 
 def _archive_extra(folder: Path, target: Path) -> None:
-    """What an archived run keeps of its snapshots: the void-fraction record and the channel record."""
+    """What an archived run keeps of its snapshots: the void-fraction record, the channel record and the colour
+    by layer (``fvdem report`` on the archived run draws ``colour_layers.png`` from it)."""
     record = void_fraction_record(folder)
     if record is not None:
         (target / VOID_FRACTION).write_text(json.dumps(record) + "\n")
     channels = channel_record(folder)
     if channels is not None:
         (target / CHANNELS).write_text(json.dumps(channels) + "\n")
+    layers = colour_layer_record(folder)
+    if layers is not None:
+        (target / COLOUR_LAYERS).write_text(json.dumps(layers) + "\n")
 
 
 def _headline(result: dict) -> str:
