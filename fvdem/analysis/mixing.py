@@ -9,8 +9,8 @@ the fully mixed value ``S0 = ln 2``:
 
 The mixing time ``t95`` is the first time ``S_tot`` reaches 0.95. A bed whose colours are shuffled at random
 does not reach 1 on a finite grid: a cell of ``n`` particles holds a binomial sample, whose entropy falls short
-of ln 2 by about ``1 / (2 n)``. ``random_mixture_entropy`` is that ceiling for the particles where they are. The Lacey index
-``M = (s0^2 - s^2) / (s0^2 - sR^2)`` compares the variance ``s^2`` of the colour-1 fraction over
+of ln 2 by about ``1 / (2 n)``. ``random_mixture_entropy`` is that ceiling for the particles where they are.
+The Lacey index ``M = (s0^2 - s^2) / (s0^2 - sR^2)`` compares the variance ``s^2`` of the colour-1 fraction over
 the occupied cells (weighted by their particle counts) with the fully segregated ``s0^2 = p (1 - p)``
 and the random-mixture ``sR^2 = p (1 - p) / n`` (``n`` the mean particles per occupied cell).
 """
