@@ -146,8 +146,8 @@ def _within_spread(a: list, b: list) -> str | None:
     errors of it, ``sqrt(var_a / n_a + var_b / n_b)`` with each family's sample variance (a family of one run
     takes the other's: the same chaos; so does a family whose variance is 0, its replicas all unmixed and
     counted at the same end, where the spread is unknown, not absent). More replicas shrink the error, so an
-    order that exists is told in the end. Returns the means and the bound as text, or None where the difference is beyond it, or neither family
-    has replicas (the ``CLOSE`` rule then)."""
+    order that exists is told in the end. Returns the means and the bound as text, or None where the difference
+    is beyond it, or neither family has replicas (the ``CLOSE`` rule then)."""
     if max(len(a), len(b)) < 2:
         return None
     means = [sum(v) / len(v) for v in (a, b)]
