@@ -99,7 +99,7 @@ def cmd_report(args) -> int:
 
 
 def cmd_compare(args) -> int:
-    from .analysis.plots import plot_mixing, plot_t95
+    from .analysis.plots import plot_colour_layer_panels, plot_mixing, plot_t95
     runs = [Path(r) for r in args.runs]
     for run in runs:
         if not (run / "timeseries.csv").exists() or not (run / "case.toml").exists():
@@ -108,7 +108,25 @@ def cmd_compare(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     print(plot_mixing(runs, out / "mixing_compare.png"))
     print(plot_t95(runs, out / "t95.png", names=compare_groups(runs)))
+    layers = _colour_layer_items(runs)
+    if layers:
+        print(plot_colour_layer_panels(layers, out / "colour_layers_compare.png"))
     return 0
+
+
+def _colour_layer_items(runs) -> list:
+    """``(label, colour-by-layer record, t95)`` of the compared runs that have one (particle snapshots or an
+    archived record, and two colours), for ``plot_colour_layer_panels``."""
+    from .analysis.mixing import mixing_time
+    from .analysis.plots import read_timeseries, run_labels
+    from .scenes.observables import colour_layer_record
+    items = []
+    for run, label in zip(runs, run_labels(runs)):
+        series = read_timeseries(run)
+        record = colour_layer_record(run) if "mixing_entropy" in series else None
+        if record is not None:
+            items.append((label, record, mixing_time(series["time"], series["mixing_entropy"])))
+    return items
 
 
 def compare_groups(runs) -> list[str]:

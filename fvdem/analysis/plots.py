@@ -164,34 +164,50 @@ COLOUR_LAYERS = "colour_layers.json"  # an archived run's colour by layer (``sce
 FEW = 20  # particles: a layer with fewer is left blank on the chart (a few particles thrown up, not a bed)
 
 
-def plot_colour_layers(out, record: dict) -> Path:
-    """Where the bed is still unmixed: the colour-1 fraction by layer (the mixing grid's height) against time,
-    from a record of the particle snapshots (``fvdem.scenes.observables.colour_layer_record``), 0.5 white;
-    layers of fewer than ``FEW`` particles blank; t95 dotted where the run mixed."""
+def _layer_panel(ax, record: dict, t95, title: str):
+    """One colour-by-layer map (``plot_colour_layer_panels``) on ``ax``; returns its mesh for a colour bar."""
     from matplotlib.colors import TwoSlopeNorm
-
-    from .mixing import mixing_time
-    plt = _pyplot()
     times = np.asarray(record["times"], float)
     fraction = np.array([[np.nan if x is None else x for x in row] for row in record["fraction"]], float)
     fraction[np.asarray(record["count"]) < FEW] = np.nan
     step = np.diff(times).min() if len(times) > 1 else 1.0
     edges_t = np.concatenate([times - 0.5 * step, [times[-1] + 0.5 * step]])
     edges_z = record["z_lower"] + record["layer_height"] * np.arange(fraction.shape[1] + 1)
-    fig, ax = plt.subplots(figsize=(7, 4))
     mesh = ax.pcolormesh(edges_t, edges_z, np.ma.masked_invalid(fraction.T), cmap="coolwarm",
                          norm=TwoSlopeNorm(0.5, 0.0, 1.0), shading="flat")
-    fig.colorbar(mesh, ax=ax, label="colour-1 fraction")
+    if t95 is not None:
+        ax.axvline(t95, color="k", ls=":", lw=1, label=f"t95 = {t95:.2f} s")
+        ax.legend(fontsize=7, loc="upper right")
+    ax.set_xlabel("time [s]")
+    ax.set_title(title, fontsize=9)
+    return mesh
+
+
+def plot_colour_layer_panels(items, path) -> Path:
+    """Where beds are still unmixed: for each ``(name, record, t95)`` (``record`` a run's colour by layer,
+    ``fvdem.scenes.observables.colour_layer_record``; ``t95`` None where it did not mix) a map of the colour-1
+    fraction by layer (the mixing grid's height) against time, side by side on one height scale: 0.5 white,
+    layers of fewer than ``FEW`` particles blank, t95 dotted."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(items), figsize=(1.5 + 4.5 * len(items), 4), sharey=True, squeeze=False,
+                             layout="constrained")
+    for ax, (name, record, t95) in zip(axes[0], items):
+        mesh = _layer_panel(ax, record, t95, f"colour by layer, {name}")
+    axes[0][0].set_ylabel("height of the layer [m]")
+    fig.colorbar(mesh, ax=list(axes[0]), label="colour-1 fraction")
+    fig.savefig(path, dpi=120)  # (laid out by the constrained layout: a colour bar shared by the panels)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_colour_layers(out, record: dict) -> Path:
+    """A run's colour by layer (``plot_colour_layer_panels``) as ``colour_layers.png``, its t95 from its time series."""
+    from .mixing import mixing_time
+    t95 = None
     if (Path(out) / "timeseries.csv").exists():
         ts = read_timeseries(out)
         t95 = mixing_time(ts["time"], ts["mixing_entropy"]) if "mixing_entropy" in ts else None
-        if t95 is not None:
-            ax.axvline(t95, color="k", ls=":", lw=1, label=f"t95 = {t95:.2f} s")
-            ax.legend(fontsize=8, loc="upper right")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("height of the layer [m]")
-    ax.set_title(f"colour by layer, {Path(out).name}", fontsize=9)
-    return _save(fig, Path(out) / "colour_layers.png")
+    return plot_colour_layer_panels([(Path(out).name, record, t95)], Path(out) / "colour_layers.png")
 
 
 def mixing_times(runs, level=MIXED, names=None) -> dict:
