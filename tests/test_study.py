@@ -894,6 +894,13 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert not [p for p in files if p.suffix in (".vtu", ".npz", ".pvd")]
     assert all((dest / "runs" / r["name"] / "channels.json").exists() for r in runs)
     assert sum(p.stat().st_size for p in files) < 400_000
+    # archived before the report kept a record (its channels.json): archived again, the record is made from the
+    # run folder, though the run holds no more simulated time than the archive
+    kept = dest / "runs" / runs[0]["name"] / "channels.json"
+    record = kept.read_text()
+    kept.unlink()
+    assert main(["study", str(out), "--archive", str(dest)]) == 0
+    assert kept.read_text() == record
     # the study raised a run's duration after it ended ([[durations]]): archived again, the archive says so,
     # and its report shows the run with more to run (not as ended)
     index = json.loads((out / "study.json").read_text())

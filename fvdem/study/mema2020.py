@@ -688,4 +688,4 @@ register_report(StudyReport(
                       "rms_speed", "max_overlap_over_diameter", "gas_max_speed"),
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",
                       "bed_height", "mixing_cells", "mixing_entropy_random"),
-    archive_extra=_archive_extra, watch=("mixing_entropy",)))
+    archive_extra=_archive_extra, archive_files=(VOID_FRACTION, CHANNELS, COLOUR_LAYERS), watch=("mixing_entropy",)))

@@ -39,6 +39,7 @@ class StudyReport:
     archived_columns: tuple = ()  # time-series columns an archive keeps besides ``time``
     archived_summary: tuple = ()  # summary keys an archive keeps besides ``ARCHIVED_SUMMARY``
     archive_extra: Callable[[Path, Path], None] | None = None  # (run folder, its archive folder): extra files
+    archive_files: tuple = ()  # the files ``archive_extra`` may write: one an archived run lacks is made again
     watch: tuple = ()  # time-series columns whose last value ``fvdem study --status`` shows per run
 
 
@@ -175,6 +176,8 @@ def archive(out, dest) -> list:
             # the run (its status, its duration) is refreshed where the folder holds as much as the archive
             if float(series["time"][-1]) == held:
                 runs[r["name"]] = {**r, "folder": f"runs/{r['name']}", "simulated_seconds": held}
+                if chosen.archive_extra and any(not (target / n).exists() for n in chosen.archive_files):
+                    chosen.archive_extra(folder, target)  # a record the report keeps since the run was archived
             _refresh_duration(runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}"}), r)
             continue
         target.mkdir(parents=True, exist_ok=True)
