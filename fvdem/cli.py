@@ -115,17 +115,15 @@ def cmd_compare(args) -> int:
 
 
 def _colour_layer_items(runs) -> list:
-    """``(label, colour-by-layer record, t95)`` of the compared runs that have one (particle snapshots or an
-    archived record, and two colours), for ``plot_colour_layer_panels``."""
-    from .analysis.mixing import mixing_time
-    from .analysis.plots import read_timeseries, run_labels
-    from .scenes.observables import colour_layer_record
+    """``(label, colour-by-layer record, t95)`` of the compared runs that have one (two colours, and particle
+    snapshots or an archived record: what ``fvdem report`` draws it from), for ``plot_colour_layer_panels``."""
+    from .analysis.plots import read_timeseries, run_labels, series_t95
+    from .scenes.observables import colour_layer_record, has_colour_layers
     items = []
     for run, label in zip(runs, run_labels(runs)):
-        series = read_timeseries(run)
-        record = colour_layer_record(run) if "mixing_entropy" in series else None
+        record = colour_layer_record(run) if has_colour_layers(run) else None
         if record is not None:
-            items.append((label, record, mixing_time(series["time"], series["mixing_entropy"])))
+            items.append((label, record, series_t95(read_timeseries(run))))
     return items
 
 

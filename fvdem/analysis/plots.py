@@ -32,6 +32,12 @@ def read_timeseries(out) -> dict:
     return {name: data[:, k] for k, name in enumerate(header)}
 
 
+def series_t95(ts: dict, level=MIXED):
+    """t95 [s] of a run's time series (``read_timeseries``): None where it did not mix or has no entropy."""
+    from .mixing import mixing_time
+    return mixing_time(ts["time"], ts["mixing_entropy"], level) if "mixing_entropy" in ts else None
+
+
 LOG_SCALE = {"kinetic_energy", "max_overlap_over_diameter"}
 NOT_PLOTTED = {"vertical_momentum", "wall_force_vertical"}  # bookkeeping for pressure-drop averages, not states to watch
 LABELS = {"kinetic_energy": "kinetic energy [J]", "bed_top": "bed top [m]",
@@ -139,14 +145,13 @@ def plot_colour_slice(out, state_file="final_state.npz", thickness=None) -> Path
 def plot_mixing(runs, path, level=MIXED) -> Path:
     """Mixing entropy against time for one or more run folders on one chart (Mema et al. (2020) Figs. 2-3),
     the t95 of each marked."""
-    from .mixing import mixing_time
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for out, name in zip(runs, run_labels(runs)):
         ts = read_timeseries(out)
         if "mixing_entropy" not in ts:
             continue
-        t95 = mixing_time(ts["time"], ts["mixing_entropy"], level)
+        t95 = series_t95(ts, level)
         label = name + (f" (t95 = {t95:.2f} s)" if t95 is not None else " (t95 not reached)")
         line, = ax.plot(ts["time"], ts["mixing_entropy"], label=label)
         if t95 is not None:
@@ -202,11 +207,7 @@ def plot_colour_layer_panels(items, path) -> Path:
 
 def plot_colour_layers(out, record: dict) -> Path:
     """A run's colour by layer (``plot_colour_layer_panels``) as ``colour_layers.png``, its t95 from its time series."""
-    from .mixing import mixing_time
-    t95 = None
-    if (Path(out) / "timeseries.csv").exists():
-        ts = read_timeseries(out)
-        t95 = mixing_time(ts["time"], ts["mixing_entropy"]) if "mixing_entropy" in ts else None
+    t95 = series_t95(read_timeseries(out)) if (Path(out) / "timeseries.csv").exists() else None
     return plot_colour_layer_panels([(Path(out).name, record, t95)], Path(out) / "colour_layers.png")
 
 
@@ -216,14 +217,13 @@ def mixing_times(runs, level=MIXED, names=None) -> dict:
     the data of Mema et al.'s Fig. 4. ``names``: the group of each run (a study's families); by default
     its case name."""
     from ..case import load_case
-    from .mixing import mixing_time
     groups = {}
     for k, out in enumerate(runs):
         case = load_case(Path(out) / "case.toml")
         g = case.gas
         ratio = g.u_over_umf if g.u_over_umf is not None else (g.inlet_velocity / g.umf if g.umf else g.inlet_velocity)
         ts = read_timeseries(out)
-        t95 = mixing_time(ts["time"], ts["mixing_entropy"], level) if "mixing_entropy" in ts else None
+        t95 = series_t95(ts, level)
         name = case.name if names is None else names[k]
         groups.setdefault(name, []).append((float(ratio), t95, float(ts["time"][-1])))
     return {name: sorted(rows, key=lambda row: (row[0], row[1] is None, row[1] or 0.0, row[2]))

@@ -223,12 +223,13 @@ def colour_layer_record(out) -> dict | None:
             "fraction": [[None if np.isnan(x) else round(float(x), 4) for x in f[:kept]] for f in fractions]}
 
 
-def _has_colour_layers(out) -> bool:
+def has_colour_layers(out) -> bool:
     """Two colours (the run measured their mixing) and particle snapshots, or an archived colour-layer record."""
+    out = Path(out)
     if not (out / "timeseries.csv").exists() or "mixing_entropy" not in read_timeseries(out):
         return False
     return len(read_pvd(out / "particles.pvd")) > 1 or (out / COLOUR_LAYERS).exists()
 
 
 # Mixing's chart of where the bed is still unmixed (a record of the snapshots, so drawn here, above fvdem.io)
-PLOTS["colour_layers"] = (lambda out: plot_colour_layers(out, colour_layer_record(out)), _has_colour_layers)
+PLOTS["colour_layers"] = (lambda out: plot_colour_layers(out, colour_layer_record(out)), has_colour_layers)

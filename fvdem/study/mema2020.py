@@ -310,8 +310,8 @@ def _entropy_order(entropy: dict, ends: dict) -> tuple | None:
     as Mema et al. read their Figs. 3 and 9 (a): higher entropy at one time, more intensive mixing. Told only
     where every run of both ended at the same time with a known entropy (else None: a run that went on
     longer would stand higher for that alone)."""
-    values = [x for f in entropy for x in entropy[f]] + [e for f in ends for e in ends[f]]
     times = [e for f in ends for e in ends[f]]
+    values = [x for f in entropy for x in entropy[f]] + times
     if any(x is None for x in values) or max(times) - min(times) > 1e-6 * max(times):
         return None
     first, second = (sum(v) / len(v) for v in entropy.values())
@@ -526,9 +526,9 @@ def _live(series) -> dict:
     """A run in progress from its time series: t95 (None if not yet mixed), and the bed pressure drop over
     W/A and its fluctuation over the second half of what it holds."""
     import numpy as np
-    from ..analysis.mixing import mixing_time
+    from ..analysis.plots import series_t95
     times = series["time"]
-    out = {"t95": mixing_time(times, series["mixing_entropy"]) if "mixing_entropy" in series else None}
+    out = {"t95": series_t95(series)}
     if "pressure_drop_over_weight" in series and len(times) > 1:
         half = series["pressure_drop_over_weight"][times >= 0.5 * times[-1]]
         out["pressure_drop_over_weight"] = float(np.mean(half))
