@@ -49,7 +49,7 @@ def test_orientation_angle_is_folded_to_a_quarter_turn():
     np.testing.assert_allclose(orientation_angles(axis), [0, 0, np.pi / 2, np.pi / 4])
 
 
-def test_t95_against_u_over_umf_from_run_folders(tmp_path):
+def test_t95_against_u_over_umf_from_run_folders(tmp_path, monkeypatch):
     """fvdem compare: t95 of each run folder against its U/Umf, grouped by case name; a run that has
     not mixed gives None (drawn as a lower bound at its end)."""
     from fvdem.analysis.plots import mixing_times
@@ -82,6 +82,17 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path):
     assert [row[1] is None for row in merged["ar1"]] == [True, False, True]
     by_family = mixing_times(runs + [twin], names=["ar1", "ar1", "ar4_mp", "ar1_paper"])
     assert by_family["ar1_paper"] == [(2.9, None, 4.0)] and len(by_family["ar1"]) == 2
+    # a published value (the study's paper terminal t95s) is a dashed line in its family's colour from its U/Umf on;
+    # one of a family not drawn is left out
+    import fvdem.analysis.plots as plots
+    figures, real_save = [], plots._save
+    monkeypatch.setattr(plots, "_save", lambda fig, path: figures.append(fig) or real_save(fig, path))
+    plots.plot_t95(runs, tmp_path / "t95_ref.png", references={"ar1": (2.6, 2.3, "ar1: paper"),
+                                                                "ar4_sp": (2.0, 2.3, "ar4_sp: paper")})
+    lines = {line.get_label(): line for line in figures[0].axes[0].get_lines()}
+    assert "ar4_sp: paper" not in lines and list(lines["ar1: paper"].get_ydata()) == [2.6, 2.6]
+    assert lines["ar1: paper"].get_xdata()[0] == 2.3 and lines["ar1: paper"].get_linestyle() == "--"
+    assert lines["ar1: paper"].get_color() == lines["ar1"].get_color()
     assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp")]) == 0
     assert (tmp_path / "cmp" / "t95.png").exists() and (tmp_path / "cmp" / "mixing_compare.png").exists()
     assert not (tmp_path / "cmp" / "colour_layers_compare.png").exists()  # no snapshots, no archived record

@@ -230,14 +230,17 @@ def mixing_times(runs, level=MIXED, names=None) -> dict:
             for name, rows in groups.items()}
 
 
-def plot_t95(runs, path, level=MIXED, names=None) -> Path:
+def plot_t95(runs, path, level=MIXED, names=None, references=None) -> Path:
     """Mixing time t95 against U/Umf, one line per case name (or per ``names``, the group of each
     run; Mema et al. (2020) Fig. 4). Each run is a marker (replicas side by side at their U/Umf); the line
     joins the means of the replicas at each U/Umf. A run that has not reached the level is an open triangle
-    at its end time (t95 is later), and a mean that counts one so is open too: a lower bound."""
+    at its end time (t95 is later), and a mean that counts one so is open too: a lower bound. ``references``
+    (name -> ``(t95, from U/Umf, label)``): a published value drawn as a dashed line in that name's colour from
+    that U/Umf on (the paper's terminal mixing times)."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     bounds = False
+    colours = {}
     for name, rows in mixing_times(runs, level, names).items():
         by = {}
         for ratio, t, end in rows:
@@ -246,7 +249,7 @@ def plot_t95(runs, path, level=MIXED, names=None) -> Path:
         means = [float(np.mean([t if t is not None else end for t, end in by[r]])) for r in ratios]
         replicas = max(len(v) for v in by.values()) > 1
         line, = ax.plot(ratios, means, "-")
-        colour = line.get_color()
+        colour = colours[name] = line.get_color()
         ax.plot([], [], "o-", color=colour, ms=4, label=f"{name} (runs; the line: mean of its replicas)"
                 if replicas else name)
         for r, mean in zip(ratios, means):
@@ -262,6 +265,10 @@ def plot_t95(runs, path, level=MIXED, names=None) -> Path:
                     bounds = True
     if bounds:
         ax.plot([], [], "^", mfc="none", color="0.3", label="not mixed by the run's end (a lower bound)")
+    right = ax.get_xlim()[1]
+    for name, (t95, start, label) in (references or {}).items():
+        if name in colours:
+            ax.plot([start, max(right, start + 0.1)], [t95, t95], "--", color=colours[name], lw=1.2, label=label)
     ax.set_xlabel("U / Umf")
     ax.set_ylabel(f"mixing time t{round(100 * level)} [s]")
     ax.grid(alpha=0.3)
