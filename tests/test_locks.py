@@ -195,6 +195,40 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     assert main(["study", str(tmp_path), "--status"]) == 2  # not a study folder
 
 
+def test_the_status_expects_runs_to_end_where_their_point_ended_or_past_their_t95(tmp_path, capsys):
+    """Besides the most (every run to its duration), the status expects a run to end where its point's ended
+    replicas in its family ended, and a run that has mixed time.stop_after_mixed past its t95."""
+    from fvdem.study.status import study_status
+    out = _status_folder(tmp_path)
+    index = json.loads((out / "study.json").read_text())
+    mixed = out / "runs" / "m_r1"  # mixed at 3.325 s (entropy t / 3.5), 4 s held, ends 2 s past t95
+    mixed.mkdir()
+    (mixed / "timeseries.csv").write_text("time,mixing_entropy\n" + "".join(
+        f"{0.01 * k!r},{min(1.0, 0.01 * k / 3.5)!r}\n" for k in range(401)))
+    (mixed / "checkpoint.npz").write_bytes(b"a checkpoint at 4 s")
+    (mixed / "case.toml").write_text("[time]\nstop_after_mixed = 2.0\n")
+    index["runs"] += [{"name": "a_r2", "family": "ar1", "status": "pending", "folder": "runs/a_r2",
+                       "point": {"gas.u_over_umf": 2.0}, "replica": 2, "duration": 8.0},
+                      {"name": "m_r1", "family": "ar1", "status": "pending", "folder": "runs/m_r1",
+                       "point": {"gas.u_over_umf": 2.9}, "replica": 1, "duration": 8.0}]
+    (out / "study.json").write_text(json.dumps(index))
+    status = study_status(out)
+    runs = {r["name"]: r for r in status["runs"]}
+    assert runs["a_r2"]["left"] == 8.0 and runs["a_r2"]["expected_left"] == pytest.approx(5.0)  # as a_r1 ended
+    assert runs["m_r1"]["t95"] == pytest.approx(3.325, abs=0.006)
+    assert runs["m_r1"]["left"] == pytest.approx(4.0)
+    assert runs["m_r1"]["expected_left"] == pytest.approx(1.325, abs=0.006)
+    # no ended replica of its family at its point: to its duration (a partial run from t = 0)
+    assert [runs[n]["expected_left"] for n in ("a_r1", "b_r1", "b_r2", "c_r1")] == [0.0, pytest.approx(5.0), 8.0, 8.0]
+    ar1 = status["families"]["ar1"]
+    assert ar1["expected_left_simulated_seconds"] == pytest.approx(6.325, abs=0.006)
+    assert ar1["expected_core_hours"] == pytest.approx(6.325 * 200.0 / 3600.0, rel=1e-3)
+    assert status["expected_core_hours"] == pytest.approx(ar1["expected_core_hours"] + 21.0 * 600.0 / 3600.0)
+    assert status["left_core_hours"] == pytest.approx((8.0 + 4.0) * 200.0 / 3600.0 + 21.0 * 600.0 / 3600.0)
+    assert main(["study", str(out), "--status"]) == 0
+    assert f"about {status['expected_core_hours']:.1f} core-hours if each run ends" in capsys.readouterr().out
+
+
 def test_study_and_summary_files_are_replaced_at_once_for_readers_polling_them(tmp_path):
     """study.json and summary.json are read while they are rewritten (--status, a study's progress, --report):
     written to a temporary file and renamed over the old one, nothing else left in the folder."""

@@ -3,12 +3,14 @@ whether a study runs there now (its folder's lock: who, where, since when), each
 now, in progress from a checkpoint, not started, failed), the simulated seconds it holds against its duration
 and its report's values (seed 000's: t95, the mixing entropy it reached), the CPU seconds per simulated second
 and peak memory each family has cost so far, and what is left: simulated seconds and core-hours at those
-rates, the hours that makes at the runs running now. Works on a study folder while its study runs (a few
+rates, at most (every run to its duration) and as expected (a run ends where its point's ended replicas did,
+or ``time.stop_after_mixed`` past its t95 once it has mixed), the hours that makes at the runs running now. Works on a study folder while its study runs (a few
 file reads per run), on a stopped one and on an archive of one (``fvdem study OUT --archive DEST``).
 """
 from __future__ import annotations
 
 import json
+import tomllib
 from pathlib import Path
 
 from ..io.locks import describe_holder, holder
@@ -25,10 +27,12 @@ STATES = ("ended", "running", "in progress", "partial", "not started", "failed")
 def study_status(out) -> dict:
     """The status of the study folder ``out`` (see the module): ``{"study", "folder", "running" (the lock's
     record of the study process, or None), "scheduler", "runs": [{"name", "family", "point", "replica",
-    "state", "simulated_seconds", "duration", "left", <the report's values>, "cpu_per_simulated_second",
-    "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second", "runs_measured",
-    "peak_memory_mb", "left_simulated_seconds", "left_core_hours"}}, "left_simulated_seconds",
-    "left_core_hours", "unmeasured" (families left without a measured rate), "hours_at_running_now"}``."""
+    "state", "simulated_seconds", "duration", "left", "expected_left", <the report's values>,
+    "cpu_per_simulated_second", "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second", "runs_measured",
+    "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
+    "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
+    "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
+    "unmeasured" (families left without a measured rate), "hours_at_running_now"}``."""
     out = Path(out)
     index = json.loads((out / "study.json").read_text())
     chosen = report_for(index.get("report"))
@@ -55,21 +59,69 @@ def study_status(out) -> dict:
         used = rate if rate is not None else slowest
         family["left_core_hours"] = None if used is None else family["left_simulated_seconds"] * used / 3600.0
         del family["cpu_seconds"], family["simulated"]
+    _expect(runs, [_folder(out, r) for r in index["runs"]])
+    for name, family in families.items():
+        family["expected_left_simulated_seconds"] = sum(r["expected_left"] for r in runs if r["family"] == name)
+        used = family["cpu_per_simulated_second"] or slowest
+        family["expected_core_hours"] = (None if used is None
+                                         else family["expected_left_simulated_seconds"] * used / 3600.0)
     counts = {state: sum(row["state"] == state for row in runs) for state in STATES}
     left_hours = (None if any(f["left_core_hours"] is None for f in families.values())
                   else sum(f["left_core_hours"] for f in families.values()))
+    expected_hours = (None if left_hours is None
+                      else sum(f["expected_core_hours"] for f in families.values()))
     return {"study": index.get("study"), "folder": str(out), "running": holder(out),
             "scheduler": index.get("scheduler"), "runs": runs, "counts": counts, "families": families,
             "left_simulated_seconds": sum(row["left"] for row in runs), "left_core_hours": left_hours,
-            "unmeasured": unmeasured,
+            "expected_left_simulated_seconds": sum(row["expected_left"] for row in runs),
+            "expected_core_hours": expected_hours, "unmeasured": unmeasured,
             "hours_at_running_now": (left_hours / counts["running"] if left_hours is not None and counts["running"]
                                      else None)}
+
+
+def _expect(runs: list, folders: list) -> None:
+    """Each run's ``expected_left``: the simulated seconds it is likely to run yet, where ``left`` is the most
+    (its duration). A run that has mixed and ends ``time.stop_after_mixed`` past its t95 (its case.toml) ends
+    there; a run whose point has ended replicas in its family ends, it is assumed, where they ended on average
+    (their mixed end, 2 s past t95 in the paper's study, or their duration); any other at its duration."""
+    ended = {}
+    for r in runs:
+        if r["state"] == "ended":
+            ended.setdefault((r["family"], json.dumps(r["point"], sort_keys=True)), []).append(r["simulated_seconds"])
+    for r, folder in zip(runs, folders):
+        if r["state"] == "ended" or r["duration"] is None:
+            r["expected_left"] = r["left"]
+            continue
+        end = r["duration"]
+        stop = _stop_after_mixed(folder) if r.get("t95") is not None else None
+        siblings = ended.get((r["family"], json.dumps(r["point"], sort_keys=True)))
+        if stop is not None:
+            end = min(end, r["t95"] + stop)
+        elif siblings:
+            end = min(end, sum(siblings) / len(siblings))
+        held = 0.0 if r["state"] == "partial" else r["simulated_seconds"]  # a partial run starts again
+        r["expected_left"] = max(0.0, end - held)
+
+
+def _folder(out: Path, r: dict) -> Path:
+    """A run's folder (study.json's entry ``r``: absolute, or relative to the study folder as in an archive)."""
+    return Path(r["folder"]) if Path(r["folder"]).is_absolute() else out / r["folder"]
+
+
+def _stop_after_mixed(folder: Path):
+    """``time.stop_after_mixed`` [s] of a run's case (its folder's case.toml), or None."""
+    try:
+        case = tomllib.loads((folder / "case.toml").read_text())
+    except (OSError, tomllib.TOMLDecodeError):
+        return None
+    stop = case.get("time", {}).get("stop_after_mixed")
+    return float(stop) if isinstance(stop, (int, float)) and stop > 0 else None
 
 
 def _run_status(out: Path, r: dict, chosen) -> tuple:
     """One run's row (``study_status``), and the CPU seconds and simulated seconds its summary measured (None
     without), which the family's rate sums."""
-    folder = Path(r["folder"]) if Path(r["folder"]).is_absolute() else out / r["folder"]
+    folder = _folder(out, r)
     summary = _summary(folder) or {}
     series = _series(folder)
     held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
@@ -139,12 +191,13 @@ def format_status(status: dict) -> str:
         + (f", peak {f['peak_memory_mb']:.0f} MB" if f["peak_memory_mb"] is not None else "")
         for name, f in status["families"].items()))
     if status["left_core_hours"] is not None and status["left_simulated_seconds"] > 0:
-        line = (f"left: at most {status['left_core_hours']:.1f} core-hours at these rates (runs that end early, "
-                "mixed or settled, take less)")
+        line = f"left: at most {status['left_core_hours']:.1f} core-hours at these rates"
         if status["unmeasured"]:
-            line += f"; {', '.join(status['unmeasured'])} at the slowest family's rate (none measured yet)"
+            line += f" ({', '.join(status['unmeasured'])} at the slowest family's rate: none measured yet)"
         if status["hours_at_running_now"] is not None:
-            line += f"; about {status['hours_at_running_now']:.1f} h at the {counts['running']} run(s) running now"
+            line += f", {status['hours_at_running_now']:.1f} h at the {counts['running']} run(s) running now"
+        line += (f"; about {status['expected_core_hours']:.1f} core-hours if each run ends where its point's ended "
+                 "replicas did, or time.stop_after_mixed past its t95 where it has mixed")
         lines.append(line)
     elif status["left_simulated_seconds"] > 0:
         lines.append("left: no run has a measured rate yet")
@@ -153,7 +206,7 @@ def format_status(status: dict) -> str:
 
 def _value_columns(runs: list) -> list:
     """The report's value columns the runs have (in the first run's order)."""
-    skip = {"name", "family", "point", "replica", "state", "simulated_seconds", "duration", "left",
+    skip = {"name", "family", "point", "replica", "state", "simulated_seconds", "duration", "left", "expected_left",
             "cpu_per_simulated_second", "peak_memory_mb", "error", "writer"}
     return list(dict.fromkeys(k for r in runs for k in r if k not in skip))
 
