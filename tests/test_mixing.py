@@ -93,6 +93,29 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path, monkeypatch):
     assert "ar4_sp: paper" not in lines and list(lines["ar1: paper"].get_ydata()) == [2.6, 2.6]
     assert lines["ar1: paper"].get_xdata()[0] == 2.3 and lines["ar1: paper"].get_linestyle() == "--"
     assert lines["ar1: paper"].get_color() == lines["ar1"].get_color()
+    # the paper's layout of Figs. 2, 3 and 9 a: a colour per U/Umf (its rank among the levels given), a line style
+    # per group, replicas alike, one legend entry per group and U/Umf with its runs' t95s
+    from matplotlib import colormaps
+    figures.clear()
+    plots.plot_mixing_by_velocity(runs + [twin], tmp_path / "by_velocity.png", names=["ar1", "ar1", "ar4_mp", "ar1"],
+                                  styles={"ar4_mp": "--"}, levels=[2.9, 1.6, 2.0, 2.3])
+    lines = figures[0].axes[0].get_lines()
+    entries = {line.get_label(): line for line in lines if not line.get_label().startswith("_")}
+    assert set(entries) == {"ar1, 1.6 Umf: t95 > 4 s", "ar4_mp, 2 Umf: t95 > 4 s", "ar1, 2.9 Umf: t95 1.50, > 4 s"}
+    tab10 = colormaps["tab10"]
+    assert entries["ar1, 1.6 Umf: t95 > 4 s"].get_color() == tab10(0)
+    assert entries["ar4_mp, 2 Umf: t95 > 4 s"].get_color() == tab10(1)
+    assert entries["ar1, 2.9 Umf: t95 1.50, > 4 s"].get_color() == tab10(3)  # 2.3 ranks between
+    assert entries["ar4_mp, 2 Umf: t95 > 4 s"].get_linestyle() == "--"
+    assert entries["ar1, 1.6 Umf: t95 > 4 s"].get_linestyle() == "-"
+    curves = [line for line in lines if len(line.get_xdata()) > 2]  # the 0.95 line has two points
+    assert len(curves) == 4 and sum(line.get_color() == tab10(3) for line in curves) == 2  # both 2.9 replicas
+    dots = [line for line in lines if len(line.get_xdata()) == 1]  # t95 on the 0.95 line: the one run that mixed
+    assert len(dots) == 1 and dots[0].get_xdata()[0] == pytest.approx(np.log(20) / 2.0, abs=0.01)
+    figures.clear()
+    plots.plot_mixing_by_velocity(runs + [twin], tmp_path / "at_2.9.png", velocities=[2.9])
+    assert [line.get_label() for line in figures[0].axes[0].get_lines() if not line.get_label().startswith("_")] == [
+        "ar1, 2.9 Umf: t95 1.50, > 4 s"]
     assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp")]) == 0
     assert (tmp_path / "cmp" / "t95.png").exists() and (tmp_path / "cmp" / "mixing_compare.png").exists()
     assert not (tmp_path / "cmp" / "colour_layers_compare.png").exists()  # no snapshots, no archived record

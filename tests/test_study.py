@@ -203,6 +203,9 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     assert not any(n.startswith(("fig3_mixing_1.6", "fig3_mixing_2.9", "fig9_mixing_2.png")) for n in names)
     assert {"mixing_ar1.png", "mixing_ar4_mp.png", "t95.png", "table.csv", "table.json"} <= set(names)
     assert drawn["fig3_mixing_2.png"] == ["ar1_2.0", "ar1_r2_2.0", "ar4_mp_2.0"]  # both AR-1 replicas
+    # the paper's own charts: Fig. 3 at its 1.6, 1.7 and 2.9 Umf (none here ran both there), Fig. 9 a at every
+    # velocity drag only ran
+    assert "fig3_mixing.png" not in names and "fig9_mixing.png" in names
 
 
 def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_stops_summary(tmp_path):

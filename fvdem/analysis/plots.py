@@ -165,6 +165,63 @@ def plot_mixing(runs, path, level=MIXED) -> Path:
     return _save(fig, Path(path))
 
 
+LINE_STYLES = ("-", "--", ":", "-.")
+
+
+def plot_mixing_by_velocity(runs, path, names=None, styles=None, velocities=None, levels=None, level=MIXED) -> Path:
+    """Mixing entropy against time in the paper's layout (Mema et al. (2020) Figs. 2, 3 and 9 a): one colour per
+    U/Umf, one line style per group (``names``, the group of each run, by default its case name; ``styles``:
+    group -> matplotlib line style, else solid, dashed, ... in the groups' order), replicas in their point's colour
+    and style, each run's t95 a dot on the 0.95 line; one legend entry per group and U/Umf with its runs' t95s
+    ("> end" for a run not mixed by its end). ``velocities``: only runs at these U/Umf. ``levels``: the U/Umf a
+    velocity's colour is ranked among (a study's, so that a velocity has one colour on all its charts), else the
+    runs'."""
+    from ..case import load_case
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    curves = []
+    for k, out in enumerate(runs):
+        ts = read_timeseries(out)
+        case = load_case(Path(out) / "case.toml")
+        ratio = round(u_over_umf(case), 6)
+        if "mixing_entropy" in ts and (velocities is None or any(abs(ratio - v) < 1e-6 for v in velocities)):
+            curves.append((case.name if names is None else names[k], ratio, ts))
+    groups = list(dict.fromkeys(name for name, _, _ in curves))
+    style = {name: (styles or {}).get(name, LINE_STYLES[j % len(LINE_STYLES)]) for j, name in enumerate(groups)}
+    ratios = sorted({ratio for _, ratio, _ in curves})
+    ranks = sorted({round(float(v), 6) for v in levels} | set(ratios)) if levels is not None else ratios
+    if len(ranks) <= 10:  # distinct colours, in the order of the velocities
+        colour = {ratio: plt.get_cmap("tab10")(ranks.index(ratio)) for ratio in ratios}
+    else:
+        colour = {ratio: plt.get_cmap("viridis")(0.9 * ranks.index(ratio) / (len(ranks) - 1)) for ratio in ratios}
+    labelled = {}
+    for name, ratio, ts in sorted(curves, key=lambda c: (c[1], groups.index(c[0]))):
+        t95 = series_t95(ts, level)
+        labelled.setdefault((name, ratio), []).append(f"{t95:.2f}" if t95 is not None else f"> {ts['time'][-1]:.3g}")
+        ax.plot(ts["time"], ts["mixing_entropy"], style[name], color=colour[ratio], lw=1.2)
+        if t95 is not None:
+            ax.plot(t95, level, "o", color=colour[ratio], ms=3.5)
+    for (name, ratio), t95s in labelled.items():
+        ax.plot([], [], style[name], color=colour[ratio], label=f"{name}, {ratio:g} Umf: t95 {', '.join(t95s)} s")
+    ax.axhline(level, color="grey", lw=0.8, ls="--")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("mixing entropy S_tot")
+    ax.set_ylim(0, 1.05)
+    ax.grid(alpha=0.3)
+    if labelled:
+        ax.legend(fontsize=7, loc="lower right")
+    return _save(fig, Path(path))
+
+
+def u_over_umf(case) -> float:
+    """A case's U/Umf: ``gas.u_over_umf``, else the inlet velocity over ``gas.umf`` (the inlet velocity without
+    one)."""
+    g = case.gas
+    if g.u_over_umf is not None:
+        return float(g.u_over_umf)
+    return float(g.inlet_velocity / g.umf if g.umf else g.inlet_velocity)
+
+
 COLOUR_LAYERS = "colour_layers.json"  # an archived run's colour by layer (``scenes.observables.colour_layer_record``)
 FEW = 20  # particles: a layer with fewer is left blank on the chart (a few particles thrown up, not a bed)
 
@@ -220,8 +277,7 @@ def mixing_times(runs, level=MIXED, names=None) -> dict:
     groups = {}
     for k, out in enumerate(runs):
         case = load_case(Path(out) / "case.toml")
-        g = case.gas
-        ratio = g.u_over_umf if g.u_over_umf is not None else (g.inlet_velocity / g.umf if g.umf else g.inlet_velocity)
+        ratio = u_over_umf(case)
         ts = read_timeseries(out)
         t95 = series_t95(ts, level)
         name = case.name if names is None else names[k]

@@ -546,22 +546,38 @@ def _mixed_or_ended(r: dict) -> bool:
     return r.get("t95") is not None or r["status"] in ENDED
 
 
+# the paper's pairs of families, the second drawn solid and the first dashed as in its figures, and the velocities
+# its figure shows: Fig. 3 AR-1 against AR-4 MP at 1.6, 1.7 and 2.9 Umf; Fig. 9 a AR-4 MP drag only against drag,
+# lift and torque at every velocity the drag-only family ran
+PAPER_PAIRS = {"fig3": ("ar1", "ar4_mp", (1.6, 1.7, 2.9)), "fig9": ("ar4_mp_drag", "ar4_mp", None)}
+
+
 def _figures(out: Path, runs: list) -> list:
-    """Mixing entropy per family (Fig. 2), t95 against U/Umf (Fig. 4: the runs that mixed or ended), and at each
-    velocity both families ran: AR-1 against AR-4 MP (Fig. 3) with their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only
-    against drag + lift + torque (Fig. 9)."""
-    from ..analysis.plots import plot_mixing, plot_t95
+    """Mixing entropy per family, a colour per velocity (Fig. 2), t95 against U/Umf (Fig. 4: the runs that mixed
+    or ended), the paper's pairs at its velocities on one chart each (``PAPER_PAIRS``: ``fig3_mixing.png``,
+    ``fig9_mixing.png``), and at each velocity both families ran: AR-1 against AR-4 MP run by run (Fig. 3) with
+    their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only against drag + lift + torque (Fig. 9)."""
+    from ..analysis.plots import plot_mixing, plot_mixing_by_velocity, plot_t95
     paths = []
+    levels = [r["point"]["gas.u_over_umf"] for r in runs if "gas.u_over_umf" in r.get("point", {})] or None
     for family in sorted({r["family"] for r in runs}):
-        paths.append(plot_mixing([Path(r["folder"]) for r in runs if r["family"] == family],
-                                 out / f"mixing_{family}.png"))
+        mine = [r for r in runs if r["family"] == family]
+        paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in mine], out / f"mixing_{family}.png",
+                                             names=[family] * len(mine), levels=levels))
+    for figure, (first, second, velocities) in PAPER_PAIRS.items():
+        pairs = [r for point, pair in sorted(_pairs(runs, first, second).items()) for r in pair
+                 if velocities is None or any(abs(v - w) < 1e-9 for v in point for w in velocities)]
+        if pairs:
+            paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in pairs], out / f"{figure}_mixing.png",
+                                                 names=[r["family"] for r in pairs], styles={first: "--", second: "-"},
+                                                 levels=levels))
     shown = [r for r in runs if _mixed_or_ended(r)]
     if shown:
         paper = {family: (t95, TERMINAL_FROM, f"{family}: the paper's terminal t95, about {t95:g} s")
                  for family, t95 in PAPER_TERMINAL_T95.items()}
         paths.append(plot_t95([Path(r["folder"]) for r in shown], out / "t95.png", names=[r["family"] for r in shown],
                               references=paper))
-    for figure, (first, second) in (("fig3", ("ar1", "ar4_mp")), ("fig9", ("ar4_mp_drag", "ar4_mp"))):
+    for figure, (first, second, _) in PAPER_PAIRS.items():
         for point, pair in sorted(_pairs(runs, first, second).items()):
             tag = "_".join(f"{v:g}" for v in point)
             paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{tag}.png"))
