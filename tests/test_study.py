@@ -206,6 +206,39 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     # the paper's own charts: Fig. 3 at its 1.6, 1.7 and 2.9 Umf (none here ran both there), Fig. 9 a at every
     # velocity drag only ran
     assert "fig3_mixing.png" not in names and "fig9_mixing.png" in names
+    assert "fig7_void_fraction.png" in names  # the paper's Fig. 7 panels: 2.0 Umf is one
+
+
+def test_the_papers_fig7_pools_each_familys_replicas_panel_by_panel(tmp_path, monkeypatch):
+    """Fig. 7 as the paper draws it: a panel per velocity, one histogram per family, its replicas pooled by
+    their cells, each replica's binarity in the label; a velocity without snapshots says so."""
+    import fvdem.analysis.plots as plots
+    from fvdem.study.mema2020 import VOID_FRACTION, plot_void_fraction_panels
+    edges = [0.05 * k for k in range(21)]
+    runs = []
+    for name, family, cells, peak, binarity in (("a1", "ar1", 100, 9, 0.4), ("a2", "ar1", 300, 10, 0.5),
+                                                ("b1", "ar4_mp", 200, 11, None)):
+        folder = tmp_path / name
+        folder.mkdir()
+        density = [0.0] * 20
+        density[peak] = 20.0  # all cells in one bin of width 0.05
+        (folder / VOID_FRACTION).write_text(json.dumps({"below": 0.3, "edges": edges, "density": density,
+                                                        "cells": cells, "binarity": binarity}))
+        runs.append({"name": name, "family": family, "folder": str(folder)})
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    figures, real_save = [], plots._save
+    monkeypatch.setattr(plots, "_save", lambda fig, path: figures.append(fig) or real_save(fig, path))
+    plot_void_fraction_panels({2.0: runs, 1.6: [{"name": "e", "family": "ar1", "folder": str(empty)}]},
+                              tmp_path / "fig7.png")
+    first, second = figures[0].axes  # one row of two
+    assert first.get_title() == "1.6 Umf: no gas snapshots" and not first.get_lines()
+    assert second.get_title() == "2 Umf"
+    lines = {line.get_label(): line.get_ydata() for line in second.get_lines()}
+    assert set(lines) == {"ar1 (2 runs, binarity 0.40, 0.50)", "ar4_mp (1 run, binarity -)"}
+    pooled = lines["ar1 (2 runs, binarity 0.40, 0.50)"]
+    assert pooled[9] == pytest.approx(20.0 * 100 / 400) and pooled[10] == pytest.approx(20.0 * 300 / 400)
+    assert sum(pooled) * 0.05 == pytest.approx(1.0)  # still a density
 
 
 def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_stops_summary(tmp_path):

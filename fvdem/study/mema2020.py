@@ -133,6 +133,45 @@ def plot_void_fractions(runs, path, below=0.3):
     return _save(fig, Path(path))
 
 
+FIG7_VELOCITIES = (1.6, 2.0, 2.3, 2.9)  # the paper's Fig. 7 panels (a)-(d), U/Umf
+
+
+def plot_void_fraction_panels(panels: dict, path, below=0.3):
+    """The paper's Fig. 7: one panel per U/Umf (``panels``: U/Umf -> runs), a histogram per family of the cell void
+    fraction below ``below`` [m] over the second half of its runs' gas snapshots, the replicas pooled (each run's
+    density weighted by its cells), labelled with each replica's binarity (``void_fraction_binarity``)."""
+    import numpy as np
+    from ..analysis.plots import _pyplot, _save
+    plt = _pyplot()
+    columns = min(2, len(panels))
+    rows = (len(panels) + columns - 1) // columns
+    fig, axes = plt.subplots(rows, columns, figsize=(5.0 * columns, 3.4 * rows), squeeze=False, sharey=True)
+    for ax, (ratio, runs) in zip(axes.flat, sorted(panels.items())):
+        by = {}
+        for r in runs:
+            record = void_fraction_record(r["folder"], below)
+            if record is not None:
+                by.setdefault(r["family"], []).append(record)
+        for family, records in by.items():
+            edges = np.asarray(records[0]["edges"])
+            cells = np.array([rec["cells"] for rec in records], float)
+            density = np.average([rec["density"] for rec in records], axis=0, weights=cells)
+            binarity = ", ".join("-" if rec["binarity"] is None else f"{rec['binarity']:.2f}" for rec in records)
+            ax.step(0.5 * (edges[1:] + edges[:-1]), density, where="mid",
+                    label=f"{family} ({len(records)} run{'s' if len(records) > 1 else ''}, binarity {binarity})")
+        ax.set_title(f"{ratio:g} Umf" + ("" if by else ": no gas snapshots"), fontsize=9)
+        ax.set_xlabel("cell void fraction")
+        ax.grid(alpha=0.3)
+        if by:
+            ax.legend(fontsize=7)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("probability density")
+    for ax in list(axes.flat)[len(panels):]:
+        ax.set_visible(False)
+    fig.suptitle(f"cells below z = {below} m, second half of each run", fontsize=10)
+    return _save(fig, Path(path))
+
+
 # Mema et al.'s findings (§5-§6) that a study's t95 table can check; each rule sees the runs by family
 CLOSE = 0.10  # relative differences below this need replicas to be told from chaos
 
@@ -577,6 +616,11 @@ def _figures(out: Path, runs: list) -> list:
                  for family, t95 in PAPER_TERMINAL_T95.items()}
         paths.append(plot_t95([Path(r["folder"]) for r in shown], out / "t95.png", names=[r["family"] for r in shown],
                               references=paper))
+    first, second, _ = PAPER_PAIRS["fig3"]
+    panels = {point[0]: pair for point, pair in _pairs(runs, first, second).items()
+              if len(point) == 1 and any(abs(point[0] - v) < 1e-9 for v in FIG7_VELOCITIES)}
+    if panels:
+        paths.append(plot_void_fraction_panels(panels, out / "fig7_void_fraction.png"))
     for figure, (first, second, _) in PAPER_PAIRS.items():
         for point, pair in sorted(_pairs(runs, first, second).items()):
             tag = "_".join(f"{v:g}" for v in point)
