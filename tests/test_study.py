@@ -209,6 +209,13 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     assert "fig7_void_fraction.png" in names  # the paper's Fig. 7 panels: 2.0 Umf is one
 
 
+def test_a_findings_numbers_read_as_one_line():
+    from fvdem.study.reports import describe_values
+    assert describe_values({"1.6": {"ar4_mp": "> 20 (not mixed)", "ar1": 16.901617}, "2": {"ar1": [1.7301, 2.0]}}) \
+        == "1.6: (ar4_mp: > 20 (not mixed); ar1: 16.9); 2: (ar1: 1.73, 2)"
+    assert describe_values(3.0) == "3" and describe_values(None) == "None"
+
+
 def test_the_papers_fig7_pools_each_familys_replicas_panel_by_panel(tmp_path, monkeypatch):
     """Fig. 7 as the paper draws it: a panel per velocity, one histogram per family, its replicas pooled by
     their cells, each replica's binarity in the label; a velocity without snapshots says so."""
@@ -922,9 +929,16 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
                      "t95": None, "point": {"gas.u_over_umf": ratio}, "replica": 1})
     (out / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
     (out / "study.toml").write_text('name = "t"\n')
-    report(out)
+    written = report(out)
     table, findings = (json.loads((out / name).read_text()) for name in ("table.json", "findings.json"))
     assert {r["family"]: r["void_fraction_binarity"] is not None for r in table} == {"ar1": True, "ar4_mp": True}
+    # the findings as a page to read: where the study stands, one row per finding with its verdict, the figures
+    page = (out / "findings.md").read_text()
+    assert out / "findings.md" in written and page.startswith("# t: findings\n")
+    assert f"2 of 2 runs at their end, 0 on the way, 0 not started; {len(findings)} findings: " in page
+    rows = [line for line in page.splitlines() if line.startswith("| ") and not line.startswith("| finding")]
+    assert [row.split(" | ")[:2] for row in rows] == [[f"| {f['finding']}", f["verdict"]] for f in findings]
+    assert "![t95](t95.png)" in page and "![fig7_void_fraction](fig7_void_fraction.png)" in page
     # the channel record over 1-4 s (no inlet ramp): the 2 x 2 test grid's columns are all "inside" the
     # column's 10 x 10 gas grid, so inside carries all the gas; spheres have no alignment
     channels = [(r["corner_gas_share"], r["wall_gas_share"], r["rod_alignment_inside"]) for r in table]

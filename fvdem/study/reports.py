@@ -131,9 +131,53 @@ def report(out) -> list:
     (out / "table.csv").write_text("\n".join(lines) + "\n")
     written = paths + [out / "table.csv", out / "table.json"]
     if chosen.findings:
-        (out / "findings.json").write_text(json.dumps(chosen.findings(rows), indent=1) + "\n")
-        written.append(out / "findings.json")
+        findings = chosen.findings(rows)
+        (out / "findings.json").write_text(json.dumps(findings, indent=1) + "\n")
+        (out / FINDINGS_PAGE).write_text(findings_page(result.get("study"), rows, findings, paths))
+        written += [out / "findings.json", out / FINDINGS_PAGE]
     return written
+
+
+FINDINGS_PAGE = "findings.md"  # the report's findings and figures as one page to read (``findings_page``)
+_VERDICT_ORDER = {"holds": 0, "does not hold": 1, "open": 2}
+
+
+def findings_page(study, rows: list, findings: list, figures: list) -> str:
+    """The findings as a Markdown page: where the study stands (runs at their end, on the way, not started), a
+    table of each finding's verdict, the numbers it was decided on (or why it is open) and its rule, and the
+    report's figures (linked by name: the page lies beside them)."""
+    ended = sum(r["status"] in ENDED for r in rows)
+    started = sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows)
+    verdicts = {}
+    for f in findings:
+        verdicts[f["verdict"]] = verdicts.get(f["verdict"], 0) + 1
+    lines = [f"# {study or 'study'}: findings", "",
+             f"{ended} of {len(rows)} runs at their end, {started} on the way, {len(rows) - ended - started} not "
+             f"started; {len(findings)} findings: " + ", ".join(
+                 f"{n} {v}" for v, n in sorted(verdicts.items(), key=lambda kv: _VERDICT_ORDER.get(kv[0], 3))) + ".",
+             "", "| finding | verdict | numbers | rule |", "|---|---|---|---|"]
+    for f in findings:
+        numbers = describe_values(f["values"]) if f.get("values") is not None else f.get("why", "")
+        lines.append("| " + " | ".join(cell.replace("|", "/") for cell in (
+            f["finding"], f["verdict"], numbers, f.get("rule", ""))) + " |")
+    if figures:
+        lines += ["", "## Figures", "", "Drawn beside this page by `fvdem study <this folder> --report` (an archive "
+                  "keeps the data they are drawn from, not the images).", ""]
+        lines += [f"![{Path(p).stem}]({Path(p).name})" for p in figures]
+    return "\n".join(lines) + "\n"
+
+
+def describe_values(values) -> str:
+    """A finding's ``values`` as one line: numbers to 3 significant digits, ``key: value`` pairs, nested levels
+    in parentheses."""
+    if isinstance(values, dict):
+        return "; ".join(f"{k}: " + (f"({describe_values(v)})" if isinstance(v, dict) else describe_values(v))
+                         for k, v in values.items())
+    if isinstance(values, (list, tuple)):
+        return ", ".join(describe_values(v) for v in values)
+    if isinstance(values, float):
+        return f"{values:.3g}"
+    return str(values)
 
 
 # --------------------------------------------------------------------------- archive (compact results)
