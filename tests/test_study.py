@@ -728,6 +728,31 @@ def test_void_fraction_binarity_is_one_for_packed_or_empty_cells_and_about_a_thi
     assert np.isnan(void_fraction_binarity(np.full(10, 0.5))) and np.isnan(void_fraction_binarity([0.5]))
 
 
+def test_the_terminal_rules_wait_for_every_velocity_from_2_3_umf_the_study_plans():
+    """The terminal t95 and "little change above 2.3 Umf" are of every velocity from 2.3 Umf on: while one the
+    study plans has no result (not started, or on its way unmixed), both wait for it; a run that ended unmixed
+    is a result (the rules then say it is too short)."""
+    from fvdem.study import check_findings
+
+    def row(ratio, t95, status="finished"):
+        return {"family": "ar4_mp", "status": status, "gas.u_over_umf": ratio, "t95": t95}
+
+    rows = [row(2.3, 3.79), row(2.6, 3.01), row(2.9, None, "pending")]
+    found = {f["finding"]: f for f in check_findings(rows)}
+    for claim in ("terminal t95 of ar4_mp about 2.3 s (paper)", "ar4_mp: little change of t95 above about 2.3 Umf"):
+        assert found[claim] == {"finding": claim, "verdict": "open",
+                                "why": "waits for 2.9 Umf (mixed so far at 2.3, 2.6)"}
+    rows[2] = row(2.9, 2.9)
+    found = {f["finding"]: f for f in check_findings(rows)}
+    terminal = found["terminal t95 of ar4_mp about 2.3 s (paper)"]
+    assert terminal["verdict"] == "does not hold" and terminal["values"] == {"2.3": 3.79, "2.6": 3.01, "2.9": 2.9}
+    little = found["ar4_mp: little change of t95 above about 2.3 Umf"]
+    assert little["verdict"] == "does not hold"  # (3.79 - 2.9) / 3.79: 23 %
+    rows[2] = row(2.9, None, "running")  # on its way, not mixed yet: no result, still waited for
+    assert {f["finding"]: f for f in check_findings(rows)}[
+        "ar4_mp: little change of t95 above about 2.3 Umf"]["why"].startswith("waits for 2.9 Umf")
+
+
 def test_the_void_fraction_and_paper_settings_findings_and_little_change_above_2_3():
     from fvdem.study import check_findings
 

@@ -539,6 +539,15 @@ def check_findings(rows) -> list:
         high = sorted(v for v in t if v >= TERMINAL_FROM)
         claim = f"terminal t95 of {family} about {paper} s (paper)"
         mixed = [v for v in high if None not in t[v]]
+        # both rules are of every velocity from 2.3 Umf on: they wait for those the study plans and has no result at
+        waiting = sorted(v for v in _t95(planned, family) if v >= TERMINAL_FROM and v not in t)
+        if waiting and mixed:
+            why = (f"waits for {', '.join(f'{v:g}' for v in waiting)} Umf (mixed so far at "
+                   f"{', '.join(f'{v:g}' for v in mixed)})")
+            findings += [{"finding": claim, "verdict": "open", "why": why},
+                         {"finding": f"{family}: little change of t95 above about 2.3 Umf", "verdict": "open",
+                          "why": why}]
+            continue
         if not high:
             findings.append({"finding": claim, "verdict": "open", "why": f"no velocity at or above {TERMINAL_FROM:g} Umf"})
         elif not mixed:
