@@ -99,7 +99,7 @@ def cmd_report(args) -> int:
 
 
 def cmd_compare(args) -> int:
-    from .analysis.plots import plot_colour_layer_panels, plot_mixing, plot_t95
+    from .analysis.plots import plot_colour_layer_panels, plot_mixing, plot_mixing_by_velocity, plot_t95
     runs = [Path(r) for r in args.runs]
     for run in runs:
         if not (run / "timeseries.csv").exists() or not (run / "case.toml").exists():
@@ -107,6 +107,7 @@ def cmd_compare(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     print(plot_mixing(runs, out / "mixing_compare.png"))
+    print(plot_mixing_by_velocity(runs, out / "mixing_by_velocity.png"))  # the paper's layout: case and U/Umf
     print(plot_t95(runs, out / "t95.png", names=compare_groups(runs)))
     layers = _colour_layer_items(runs)
     if layers:
@@ -426,7 +427,7 @@ def make_parser() -> argparse.ArgumentParser:
     compare = sub.add_parser("compare", help="several runs on one chart: mixing entropy against time and "
                                              "t95 against U/Umf (Mema et al. (2020) Figs. 2-4)")
     compare.add_argument("runs", nargs="+", help="run folders")
-    compare.add_argument("--out", default=".", help="folder for mixing_compare.png and t95.png")
+    compare.add_argument("--out", default=".", help="folder for mixing_compare.png, mixing_by_velocity.png and t95.png")
     compare.set_defaults(func=cmd_compare)
     study = sub.add_parser("study", help="run a study file's runs on Dask (or --report a study folder)")
     study.add_argument("study", help="a study file (studies/*.toml), or a study folder with --report")

@@ -118,6 +118,7 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path, monkeypatch):
         "ar1, 2.9 Umf: t95 1.50, > 4 s"]
     assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp")]) == 0
     assert (tmp_path / "cmp" / "t95.png").exists() and (tmp_path / "cmp" / "mixing_compare.png").exists()
+    assert (tmp_path / "cmp" / "mixing_by_velocity.png").exists()
     assert not (tmp_path / "cmp" / "colour_layers_compare.png").exists()  # no snapshots, no archived record
     # runs with a colour-by-layer record (archived, as a study's archive keeps it) get a panel each
     import json
