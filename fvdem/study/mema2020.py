@@ -549,14 +549,16 @@ def check_findings(rows) -> list:
                           "why": why}]
             continue
         if not high:
-            findings.append({"finding": claim, "verdict": "open", "why": f"no velocity at or above {TERMINAL_FROM:g} Umf"})
+            findings.append({"finding": claim, "verdict": "open",
+                             "why": f"no velocity at or above {TERMINAL_FROM:g} Umf"})
         elif not mixed:
             findings.append({"finding": claim, "verdict": "open", "why": "not mixed by the run's end (too short)"})
         else:
             means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
             terminal = sum(means.values()) / len(means)
             findings.append({"finding": claim, "verdict": "holds" if abs(terminal / paper - 1) < TERMINAL else "does not hold",
-                             "values": means, "rule": f"mean t95 at or above {TERMINAL_FROM:g} Umf within {100 * TERMINAL:.0f} % of the paper"})
+                             "values": means, "rule": f"mean t95 at or above {TERMINAL_FROM:g} Umf within "
+                                                      f"{100 * TERMINAL:.0f} % of the paper"})
         claim = f"{family}: little change of t95 above about 2.3 Umf"
         if len(mixed) < 2:
             findings.append({"finding": claim, "verdict": "open",

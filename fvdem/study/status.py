@@ -4,8 +4,9 @@ now, in progress from a checkpoint, not started, failed), the simulated seconds 
 and its report's values (seed 000's: t95, the mixing entropy it reached), the CPU seconds per simulated second
 and peak memory each family has cost so far, and what is left: simulated seconds and core-hours at those
 rates, at most (every run to its duration) and as expected (a run ends where its point's ended replicas did,
-or ``time.stop_after_mixed`` past its t95 once it has mixed), the hours that makes at the runs running now. Works on a study folder while its study runs (a few
-file reads per run), on a stopped one and on an archive of one (``fvdem study OUT --archive DEST``).
+or ``time.stop_after_mixed`` past its t95 once it has mixed), the hours that makes at the runs running now.
+Works on a study folder while its study runs (a few file reads per run), on a stopped one and on an archive of
+one (``fvdem study OUT --archive DEST``).
 """
 from __future__ import annotations
 
@@ -28,8 +29,8 @@ def study_status(out) -> dict:
     """The status of the study folder ``out`` (see the module): ``{"study", "folder", "running" (the lock's
     record of the study process, or None), "scheduler", "runs": [{"name", "family", "point", "replica",
     "state", "simulated_seconds", "duration", "left", "expected_left", <the report's values>,
-    "cpu_per_simulated_second", "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second", "runs_measured",
-    "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
+    "cpu_per_simulated_second", "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second",
+    "runs_measured", "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
     "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
     "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
     "unmeasured" (families left without a measured rate), "hours_at_running_now"}``."""
