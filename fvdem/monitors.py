@@ -93,8 +93,9 @@ class RunawayWatch:
             warnings.warn(f"t = {model.time:.4g} s: the largest overlap is {100 * overlap:.1f} % of a diameter, above "
                           f"{100 * OVERLAP_WARNING:.1f} %, beyond the 5.4 % (AR-1) and 7.2 % (AR-4) the defaults reached in the "
                           "runs they were chosen on (docs/speed-accuracy.md): the bed compresses more than the 5 % "
-                          "height budget; raise "
-                          "contact.normal_stiffness (and lower time.dem_step with 1/sqrt(k_n))",
+                          "height budget; raise contact.normal_stiffness (and lower time.dem_step with 1/sqrt(k_n)) "
+                          "where the bed's height or pressure matter (the paper's full beds at 2 Umf start at 8-10 % "
+                          "and mixed no faster with a 4x stiffer spring: docs/validation.md, stage 1)",
                           RuntimeWarning, stacklevel=4)
         gas, box = model.gas, model.dem.box
         if gas is None or gas.config.inlet_velocity <= 0 or box.periodic[2] or "outlet" in self.warned_about:
