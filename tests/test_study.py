@@ -436,6 +436,26 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     early = mp[:2] + [row("ar4_mp", 2.3, 3.55), dict(row("ar4_mp", 2.9, None, end=0.0), status="stopped")]
     waits = found(ar1 + early)["the AR-1/AR-4 difference shrinks at the highest velocity"]
     assert waits["verdict"] == "open" and "waits for the study's highest velocity, 2.9 Umf" in waits["why"]
+    # the size of the difference, not its sign: the campaign's first replicas (AR-1 16.9, 13.5, 4.21, 3.14 s at
+    # 1.6, 1.7, 2.0, 2.9; AR-4 MP > 20, 8.51, 4.81, 4.36): at 2.9 AR-4 MP lags by 1.22 s, more than the 0.6 s at
+    # 2.0 (a difference that changed sign and grew), while the signed difference (-1.22) was the smallest
+    campaign = [row("ar1", 1.6, 16.9, end=20.0), row("ar1", 1.7, 13.5, end=16.0), row("ar1", 2.0, 4.21),
+                row("ar1", 2.9, 3.14), row("ar4_mp", 1.6, None, end=20.0), row("ar4_mp", 1.7, 8.51, end=16.0),
+                row("ar4_mp", 2.0, 4.81), row("ar4_mp", 2.9, 4.36)]
+    grew = found(campaign)["the AR-1/AR-4 difference shrinks at the highest velocity"]
+    assert grew["verdict"] == "does not hold" and grew["values"]["difference at 2.9 Umf"] == pytest.approx(-1.22)
+    # AR-4 MP unmixed at 1.6: AR-1 minus AR-4 below 16.9 - 20, a size above 3.1, past the 1.22 at 2.9
+    assert grew["values"]["differences up to 2 Umf"]["1.6"] == "< -3.1"
+    closer = campaign[:7] + [row("ar4_mp", 2.9, 3.5)]  # 0.36 s at 2.9: smaller than everywhere up to 2.0
+    assert found(closer)["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "holds"
+    # a bound that does not reach the size at the top tells nothing there: open (AR-1 at 19.5 against AR-4 MP
+    # unmixed at 20: a size above 0.5 only, against 0.36 at 2.9 it decides, against 1.0 it does not)
+    near = [row("ar1", 1.6, 19.5, end=20.0)] + campaign[1:7]
+    assert found(near + [row("ar4_mp", 2.9, 3.5)])["the AR-1/AR-4 difference shrinks at the highest velocity"][
+        "verdict"] == "holds"
+    unknown = found(near[:2] + [row("ar1", 2.0, 4.21), row("ar1", 2.9, 3.14)] + near[4:6] + [
+        row("ar4_mp", 2.0, 2.21), row("ar4_mp", 2.9, 4.14)])["the AR-1/AR-4 difference shrinks at the highest velocity"]
+    assert unknown["verdict"] == "open" and "1.6 Umf: ar1 minus ar4_mp only bounded (< -0.5 s)" in unknown["why"]
     # lift and torque: drag only minus full 1.0 s at 1.7 and 2.0, 0.1 s at 2.9
     drag = [row("ar4_mp_drag", 1.7, 6.0), row("ar4_mp_drag", 2.0, 4.0), row("ar4_mp_drag", 2.9, 2.9)]
     lift = found(mp + drag)["the effect of lift and torque shrinks at the highest velocity"]
