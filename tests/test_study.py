@@ -209,6 +209,19 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     assert "fig7_void_fraction.png" in names  # the paper's Fig. 7 panels: 2.0 Umf is one
 
 
+def test_the_share_of_the_window_with_the_bed_top_at_the_outlet():
+    """``bed_at_roof``: over the window (1 s after a 1 s ramp, for 3 s), the share of samples whose bed_top lies
+    within 1 cm of the outlet."""
+    import numpy as np
+    from fvdem.study.mema2020 import _at_roof
+    time = np.round(np.arange(0, 8.001, 0.01), 2)
+    top = np.where((time >= 2.0) & (time < 3.5), 1.05, 0.6)  # at the roof for the first half of 2-5 s
+    series = {"time": time, "bed_top": top}
+    assert _at_roof(series, 1.05, ramp=1.0) == pytest.approx(150 / 301, abs=1e-9)
+    assert _at_roof({**series, "bed_top": np.full_like(time, 1.045)}, 1.05, ramp=1.0) == 1.0  # within 1 cm
+    assert _at_roof(series, None, ramp=1.0) is None and _at_roof({"time": time}, 1.05) is None
+
+
 def test_a_findings_numbers_read_as_one_line():
     from fvdem.study.reports import describe_values
     assert describe_values({"1.6": {"ar4_mp": "> 20 (not mixed)", "ar1": 16.901617}, "2": {"ar1": [1.7301, 2.0]}}) \
@@ -505,6 +518,14 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     # one velocity told against the claim decides, whatever another leaves within the noise
     lower = erupted + [row("ar1", 2.0, 3.0, height=2.5), row("ar4_mp", 2.0, 3.0, height=2.0)]
     assert found(lower)["AR-4 beds expand more than AR-1 at the same U/Umf"]["verdict"] == "does not hold"
+    # a bed whose top stood at the outlet (rods pinned at the roof: the campaign's AR-4 MP at 2.9 Umf, 5.04 x
+    # its settled height, the column's) has no height of its own: left out, its velocity open
+    more_at = more + [row("ar1", 2.9, 3.1, height=3.09), dict(row("ar4_mp", 2.9, 4.4, height=5.04), bed_at_roof=1.0)]
+    roofed = found(more_at)["AR-4 beds expand more than AR-1 at the same U/Umf"]
+    assert roofed["verdict"] == "open" and "2.9" not in roofed["values"]
+    assert "2.9 Umf: ar4_mp's bed top stood at the outlet (particles pinned at the roof)" in roofed["why"]
+    more_at[-1]["bed_at_roof"] = 0.2  # at the outlet only now and then: its height counts
+    assert found(more_at)["AR-4 beds expand more than AR-1 at the same U/Umf"]["verdict"] == "holds"
 
 
 def _square_or_fail(item, threads):
