@@ -227,6 +227,13 @@ def test_the_status_expects_runs_to_end_where_their_point_ended_or_past_their_t9
     assert status["left_core_hours"] == pytest.approx((8.0 + 4.0) * 200.0 / 3600.0 + 21.0 * 600.0 / 3600.0)
     assert main(["study", str(out), "--status"]) == 0
     assert f"about {status['expected_core_hours']:.1f} core-hours if each run ends" in capsys.readouterr().out
+    # the case read as a case: a margin with its unit, and a margin of 0 (the run ends at its t95)
+    (mixed / "case.toml").write_text('[time]\nstop_after_mixed = "2 s"\n')
+    runs = {r["name"]: r for r in study_status(out)["runs"]}
+    assert runs["m_r1"]["expected_left"] == pytest.approx(1.325, abs=0.006)
+    (mixed / "case.toml").write_text("[time]\nstop_after_mixed = 0.0\n")
+    runs = {r["name"]: r for r in study_status(out)["runs"]}
+    assert runs["m_r1"]["expected_left"] == 0.0  # mixed at 3.325 s, 4 s held: at its end
 
 
 def test_study_and_summary_files_are_replaced_at_once_for_readers_polling_them(tmp_path):

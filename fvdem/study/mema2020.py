@@ -10,10 +10,9 @@ import math
 from pathlib import Path
 
 from ..analysis.plots import COLOUR_LAYERS
-from ..case import CaseError, load_case
 from ..scenes.observables import colour_layer_record
 from .reports import StudyReport, register_report
-from .tasks import ENDED, FAILED, IN_PROGRESS
+from .tasks import ENDED, FAILED, IN_PROGRESS, _folder_case
 
 
 # s: the window of the bed's height and of its channels, the same in every run whatever its length (8 s,
@@ -69,16 +68,8 @@ def _at_roof(series, roof: float | None, ramp: float | None = None):
 
 def _gas(folder: Path):
     """The gas settings of a run's case.toml; None without a readable one."""
-    case = _case(folder)
+    case = _folder_case(folder)
     return None if case is None else case.gas
-
-
-def _case(folder: Path):
-    """A run's case (its case.toml); None without a readable one."""
-    try:
-        return load_case(folder / "case.toml")
-    except (CaseError, OSError):
-        return None
 
 
 def _inlet_passes_umf(gas) -> float | None:
@@ -704,7 +695,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), the
     void fractions' binarity and the largest overlap's median, 99th percentile and maximum (``_overlaps``)."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
-    case = _case(folder)
+    case = _folder_case(folder)
     gas = None if case is None else case.gas
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
     fastest = _window_mean(series, "gas_max_speed", ramp)
@@ -762,9 +753,8 @@ def channel_record(folder, window: tuple | None = None) -> dict | None:
             return None
         record = json.loads(stored.read_text())
         return {**record, "rows": [r for r in record["rows"] if wanted(r["time"])]}
-    try:
-        case = load_case(folder / "case.toml")
-    except (CaseError, OSError):
+    case = _folder_case(folder)
+    if case is None:
         return None
     lower, upper, cells = case.domain.lower, case.domain.upper, tuple(case.gas.cells)
     rods = case.particles.shape == "spherocylinder"

@@ -11,13 +11,12 @@ one (``fvdem study OUT --archive DEST``).
 from __future__ import annotations
 
 import json
-import tomllib
 from pathlib import Path
 
 from ..io.locks import describe_holder, holder
 from ..io.run_folder import CHECKPOINT
 from .reports import _series, report_for
-from .tasks import FAILED, _summary
+from .tasks import FAILED, _folder_case, _summary
 
 # a run's state in the status: at its end; a process writing it now; a checkpoint it resumes from; results
 # without a checkpoint (an archive's copy of a run in progress, a run stopped before its first checkpoint: it
@@ -85,17 +84,18 @@ def _expect(runs: list, folders: list) -> None:
     (its duration). A run that has mixed and ends ``time.stop_after_mixed`` past its t95 (its case.toml) ends
     there; a run whose point has ended replicas in its family ends, it is assumed, where they ended on average
     (their mixed end, 2 s past t95 in the paper's study, or their duration); any other at its duration."""
+    points = [(r["family"], json.dumps(r["point"], sort_keys=True)) for r in runs]
     ended = {}
-    for r in runs:
+    for r, point in zip(runs, points):
         if r["state"] == "ended":
-            ended.setdefault((r["family"], json.dumps(r["point"], sort_keys=True)), []).append(r["simulated_seconds"])
-    for r, folder in zip(runs, folders):
+            ended.setdefault(point, []).append(r["simulated_seconds"])
+    for r, folder, point in zip(runs, folders, points):
         if r["state"] == "ended" or r["duration"] is None:
             r["expected_left"] = r["left"]
             continue
         end = r["duration"]
         stop = _stop_after_mixed(folder) if r.get("t95") is not None else None
-        siblings = ended.get((r["family"], json.dumps(r["point"], sort_keys=True)))
+        siblings = ended.get(point)
         if stop is not None:
             end = min(end, r["t95"] + stop)
         elif siblings:
@@ -110,13 +110,9 @@ def _folder(out: Path, r: dict) -> Path:
 
 
 def _stop_after_mixed(folder: Path):
-    """``time.stop_after_mixed`` [s] of a run's case (its folder's case.toml), or None."""
-    try:
-        case = tomllib.loads((folder / "case.toml").read_text())
-    except (OSError, tomllib.TOMLDecodeError):
-        return None
-    stop = case.get("time", {}).get("stop_after_mixed")
-    return float(stop) if isinstance(stop, (int, float)) and stop > 0 else None
+    """``time.stop_after_mixed`` [s] of a run's case (its folder's case.toml, read as a case: "2 s" is 2), or None."""
+    case = _folder_case(folder)
+    return None if case is None else case.time.stop_after_mixed
 
 
 def _run_status(out: Path, r: dict, chosen) -> tuple:

@@ -41,6 +41,14 @@ def _summary(folder: Path) -> dict | None:
         return None
 
 
+def _folder_case(folder: Path):
+    """The case a run folder's ``case.toml`` holds (``load_case``: units, defaults); None without a readable one."""
+    try:
+        return load_case(Path(folder) / "case.toml")
+    except (CaseError, OSError):
+        return None
+
+
 def _finished(folder: Path, case) -> bool:
     """Whether a run folder's summary shows the run at its end under ``case``: its end time reached, or ended
     early by a criterion the case still sets (settled; mixed ``time.stop_after_mixed`` ago, that margin not
