@@ -146,8 +146,7 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
     """The findings as a Markdown page: where the study stands (runs at their end, on the way, not started), a
     table of each finding's verdict, the numbers it was decided on (or why it is open) and its rule, and the
     report's figures (linked by name: the page lies beside them)."""
-    ended = sum(r["status"] in ENDED for r in rows)
-    started = sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows)
+    ended, started = _ran(rows)
     verdicts = {}
     for f in findings:
         verdicts[f["verdict"]] = verdicts.get(f["verdict"], 0) + 1
@@ -165,6 +164,12 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
                   "keeps the data they are drawn from, not the images).", ""]
         lines += [f"![{Path(p).stem}]({Path(p).name})" for p in figures]
     return "\n".join(lines) + "\n"
+
+
+def _ran(rows: list) -> tuple[int, int]:
+    """How many of the table's runs reached their end, and how many others hold simulated time (on the way)."""
+    ended = sum(r["status"] in ENDED for r in rows)
+    return ended, sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows)
 
 
 def describe_values(values) -> str:
@@ -367,8 +372,7 @@ def results(out, dest) -> Path:
         if made.get("host"):
             hosts.add(f"{made['host']} ({made.get('threads')} thread(s) a run)")
             libraries.add(", ".join(f"{k} {made[k]}" for k in ("fvdem", "python", "numpy", "numba", "fipy") if k in made))
-    ended = sum(r["status"] in ENDED for r in rows)
-    started = sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows)
+    ended, started = _ran(rows)
     findings = json.loads((out / "findings.json").read_text()) if (out / "findings.json").exists() else None
     decided = None if findings is None else sum(f["verdict"] != "open" for f in findings)
     study = {
