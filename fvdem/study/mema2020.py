@@ -645,6 +645,11 @@ def _mixed_or_ended(r: dict) -> bool:
 PAPER_PAIRS = {"fig3": ("ar1", "ar4_mp", (1.6, 1.7, 2.9)), "fig9": ("ar4_mp_drag", "ar4_mp", None)}
 
 
+def _among(point: tuple, velocities) -> bool:
+    """Whether an axes point (``_pairs``' keys) holds one of ``velocities`` (U/Umf, to rounding)."""
+    return any(abs(v - w) < 1e-9 for v in point for w in velocities)
+
+
 def _figures(out: Path, runs: list) -> list:
     """Mixing entropy per family, a colour per velocity (Fig. 2), t95 against U/Umf (Fig. 4: the runs that mixed
     or ended), the paper's pairs at its velocities on one chart each (``PAPER_PAIRS``: ``fig3_mixing.png``,
@@ -657,9 +662,9 @@ def _figures(out: Path, runs: list) -> list:
         mine = [r for r in runs if r["family"] == family]
         paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in mine], out / f"mixing_{family}.png",
                                              names=[family] * len(mine), levels=levels))
+    paired = {figure: sorted(_pairs(runs, first, second).items()) for figure, (first, second, _) in PAPER_PAIRS.items()}
     for figure, (first, second, velocities) in PAPER_PAIRS.items():
-        pairs = [r for point, pair in sorted(_pairs(runs, first, second).items()) for r in pair
-                 if velocities is None or any(abs(v - w) < 1e-9 for v in point for w in velocities)]
+        pairs = [r for point, pair in paired[figure] for r in pair if velocities is None or _among(point, velocities)]
         if pairs:
             paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in pairs], out / f"{figure}_mixing.png",
                                                  names=[r["family"] for r in pairs], styles={first: "--", second: "-"},
@@ -670,13 +675,11 @@ def _figures(out: Path, runs: list) -> list:
                  for family, t95 in PAPER_TERMINAL_T95.items()}
         paths.append(plot_t95([Path(r["folder"]) for r in shown], out / "t95.png", names=[r["family"] for r in shown],
                               references=paper))
-    first, second, _ = PAPER_PAIRS["fig3"]
-    panels = {point[0]: pair for point, pair in _pairs(runs, first, second).items()
-              if len(point) == 1 and any(abs(point[0] - v) < 1e-9 for v in FIG7_VELOCITIES)}
+    panels = {point[0]: pair for point, pair in paired["fig3"] if len(point) == 1 and _among(point, FIG7_VELOCITIES)}
     if panels:
         paths.append(plot_void_fraction_panels(panels, out / "fig7_void_fraction.png"))
-    for figure, (first, second, _) in PAPER_PAIRS.items():
-        for point, pair in sorted(_pairs(runs, first, second).items()):
+    for figure in PAPER_PAIRS:
+        for point, pair in paired[figure]:
             tag = "_".join(f"{v:g}" for v in point)
             paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{tag}.png"))
             if figure == "fig3":
