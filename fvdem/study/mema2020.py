@@ -525,8 +525,9 @@ def _expansion(rows) -> dict:
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf"
     ended = [r for r in rows if r["status"] in ENDED and r.get("bed_expansion") is not None]
     # a bed whose top stood at the outlet for most of the window has no height of its own there (``_at_roof``)
-    roofed = [r for r in ended if (r.get("bed_at_roof") or 0.0) >= 0.5]
-    measured = [r for r in ended if r not in roofed]
+    at_roof = [(r.get("bed_at_roof") or 0.0) >= 0.5 for r in ended]
+    roofed = [r for r, roof in zip(ended, at_roof) if roof]
+    measured = [r for r, roof in zip(ended, at_roof) if not roof]
     a, b = _by_velocity(measured, "ar4_mp", "bed_expansion"), _by_velocity(measured, "ar1", "bed_expansion")
     roof = sorted({(r["gas.u_over_umf"], r["family"]) for r in roofed if r["family"] in ("ar4_mp", "ar1")})
     common = sorted(set(a) & set(b))
