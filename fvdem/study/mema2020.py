@@ -582,15 +582,16 @@ def check_findings(rows) -> list:
         t = _t95(rows, family)
         high = sorted(v for v in t if v >= TERMINAL_FROM)
         claim = f"terminal t95 of {family} about {paper} s (paper)"
+        change = f"{family}: little change of t95 above about 2.3 Umf"
         mixed = [v for v in high if None not in t[v]]
+        means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
         # both rules are of every velocity from 2.3 Umf on: they wait for those the study plans and has no result at
         waiting = sorted(v for v in _t95(planned, family) if v >= TERMINAL_FROM and v not in t)
         if waiting and mixed:
             why = (f"waits for {', '.join(f'{v:g}' for v in waiting)} Umf (mixed so far at "
                    f"{', '.join(f'{v:g}' for v in mixed)})")
             findings += [{"finding": claim, "verdict": "open", "why": why},
-                         {"finding": f"{family}: little change of t95 above about 2.3 Umf", "verdict": "open",
-                          "why": why}]
+                         {"finding": change, "verdict": "open", "why": why}]
             continue
         if not high:
             findings.append({"finding": claim, "verdict": "open",
@@ -598,19 +599,16 @@ def check_findings(rows) -> list:
         elif not mixed:
             findings.append({"finding": claim, "verdict": "open", "why": "not mixed by the run's end (too short)"})
         else:
-            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
             terminal = sum(means.values()) / len(means)
             findings.append({"finding": claim, "verdict": "holds" if abs(terminal / paper - 1) < TERMINAL else "does not hold",
                              "values": means, "rule": f"mean t95 at or above {TERMINAL_FROM:g} Umf within "
                                                       f"{100 * TERMINAL:.0f} % of the paper"})
-        claim = f"{family}: little change of t95 above about 2.3 Umf"
         if len(mixed) < 2:
-            findings.append({"finding": claim, "verdict": "open",
+            findings.append({"finding": change, "verdict": "open",
                              "why": f"fewer than two mixed velocities at or above {TERMINAL_FROM:g} Umf"})
         else:
-            means = {f"{v:g}": sum(t[v]) / len(t[v]) for v in mixed}
             spread = (max(means.values()) - min(means.values())) / max(means.values())
-            findings.append({"finding": claim, "verdict": "holds" if spread < 0.2 else "does not hold",
+            findings.append({"finding": change, "verdict": "holds" if spread < 0.2 else "does not hold",
                              "values": means, "rule": "spread below 20 %"})
     findings.append(_expansion(rows))
     findings.append(_compare_binarity(rows))
