@@ -101,11 +101,11 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path, monkeypatch):
                                   styles={"ar4_mp": "--"}, levels=[2.9, 1.6, 2.0, 2.3])
     lines = figures[0].axes[0].get_lines()
     entries = {line.get_label(): line for line in lines if not line.get_label().startswith("_")}
-    assert set(entries) == {"ar1, 1.6 Umf: t95 > 4 s", "ar4_mp, 2 Umf: t95 > 4 s", "ar1, 2.9 Umf: t95 1.50, > 4 s"}
+    assert set(entries) == {"ar1, 1.6 Umf: t95 > 4 s", "ar4_mp, 2 Umf: t95 > 4 s", "ar1, 2.9 Umf: t95 1.50 s, > 4 s"}
     tab10 = colormaps["tab10"]
     assert entries["ar1, 1.6 Umf: t95 > 4 s"].get_color() == tab10(0)
     assert entries["ar4_mp, 2 Umf: t95 > 4 s"].get_color() == tab10(1)
-    assert entries["ar1, 2.9 Umf: t95 1.50, > 4 s"].get_color() == tab10(3)  # 2.3 ranks between
+    assert entries["ar1, 2.9 Umf: t95 1.50 s, > 4 s"].get_color() == tab10(3)  # 2.3 ranks between
     assert entries["ar4_mp, 2 Umf: t95 > 4 s"].get_linestyle() == "--"
     assert entries["ar1, 1.6 Umf: t95 > 4 s"].get_linestyle() == "-"
     curves = [line for line in lines if len(line.get_xdata()) > 2]  # the 0.95 line has two points
@@ -115,7 +115,13 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path, monkeypatch):
     figures.clear()
     plots.plot_mixing_by_velocity(runs + [twin], tmp_path / "at_2.9.png", velocities=[2.9])
     assert [line.get_label() for line in figures[0].axes[0].get_lines() if not line.get_label().startswith("_")] == [
-        "ar1, 2.9 Umf: t95 1.50, > 4 s"]
+        "ar1, 2.9 Umf: t95 1.50 s, > 4 s"]
+    # a run that has not ended (a study's run in progress) and has not mixed: its time bounds nothing yet
+    figures.clear()
+    plots.plot_mixing_by_velocity(runs + [twin], tmp_path / "at_2.9.png", velocities=[2.9],
+                                  ended=[True, True, True, False])
+    assert [line.get_label() for line in figures[0].axes[0].get_lines() if not line.get_label().startswith("_")] == [
+        "ar1, 2.9 Umf: t95 1.50 s, on its way at 4 s"]
     assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp")]) == 0
     assert (tmp_path / "cmp" / "t95.png").exists() and (tmp_path / "cmp" / "mixing_compare.png").exists()
     assert (tmp_path / "cmp" / "mixing_by_velocity.png").exists()

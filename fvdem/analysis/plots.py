@@ -168,14 +168,16 @@ def plot_mixing(runs, path, level=MIXED) -> Path:
 LINE_STYLES = ("-", "--", ":", "-.")
 
 
-def plot_mixing_by_velocity(runs, path, names=None, styles=None, velocities=None, levels=None, level=MIXED) -> Path:
+def plot_mixing_by_velocity(runs, path, names=None, styles=None, velocities=None, levels=None, level=MIXED,
+                            ended=None) -> Path:
     """Mixing entropy against time in the paper's layout (Mema et al. (2020) Figs. 2, 3 and 9 a): one colour per
     U/Umf, one line style per group (``names``, the group of each run, by default its case name; ``styles``:
     group -> matplotlib line style, else solid, dashed, ... in the groups' order), replicas in their point's colour
     and style, each run's t95 a dot on the 0.95 line; one legend entry per group and U/Umf with its runs' t95s
-    ("> end" for a run not mixed by its end). ``velocities``: only runs at these U/Umf. ``levels``: the U/Umf a
-    velocity's colour is ranked among (a study's, so that a velocity has one colour on all its charts), else the
-    runs'."""
+    ("> end" for a run not mixed by its end, "on its way at t" for one not mixed by the time it has reached, where
+    ``ended``, a flag per run, says it has not ended: its time bounds nothing yet). ``velocities``: only runs at
+    these U/Umf. ``levels``: the U/Umf a velocity's colour is ranked among (a study's, so that a velocity has one
+    colour on all its charts), else the runs'."""
     from ..case import load_case
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.5, 4))
@@ -185,24 +187,26 @@ def plot_mixing_by_velocity(runs, path, names=None, styles=None, velocities=None
         case = load_case(Path(out) / "case.toml")
         ratio = round(u_over_umf(case), 6)
         if "mixing_entropy" in ts and (velocities is None or any(abs(ratio - v) < 1e-6 for v in velocities)):
-            curves.append((case.name if names is None else names[k], ratio, ts))
-    groups = list(dict.fromkeys(name for name, _, _ in curves))
+            curves.append((case.name if names is None else names[k], ratio, ts, True if ended is None else ended[k]))
+    groups = list(dict.fromkeys(name for name, _, _, _ in curves))
     style = {name: (styles or {}).get(name, LINE_STYLES[j % len(LINE_STYLES)]) for j, name in enumerate(groups)}
-    ratios = sorted({ratio for _, ratio, _ in curves})
+    ratios = sorted({ratio for _, ratio, _, _ in curves})
     ranks = sorted({round(float(v), 6) for v in levels} | set(ratios)) if levels is not None else ratios
     if len(ranks) <= 10:  # distinct colours, in the order of the velocities
         colour = {ratio: plt.get_cmap("tab10")(ranks.index(ratio)) for ratio in ratios}
     else:
         colour = {ratio: plt.get_cmap("viridis")(0.9 * ranks.index(ratio) / (len(ranks) - 1)) for ratio in ratios}
     labelled = {}
-    for name, ratio, ts in sorted(curves, key=lambda c: (c[1], groups.index(c[0]))):
+    for name, ratio, ts, done in sorted(curves, key=lambda c: (c[1], groups.index(c[0]))):
         t95 = series_t95(ts, level)
-        labelled.setdefault((name, ratio), []).append(f"{t95:.2f}" if t95 is not None else f"> {ts['time'][-1]:.3g}")
+        labelled.setdefault((name, ratio), []).append(
+            f"{t95:.2f} s" if t95 is not None else f"> {ts['time'][-1]:.3g} s" if done
+            else f"on its way at {ts['time'][-1]:.3g} s")
         ax.plot(ts["time"], ts["mixing_entropy"], style[name], color=colour[ratio], lw=1.2)
         if t95 is not None:
             ax.plot(t95, level, "o", color=colour[ratio], ms=3.5)
     for (name, ratio), t95s in labelled.items():
-        ax.plot([], [], style[name], color=colour[ratio], label=f"{name}, {ratio:g} Umf: t95 {', '.join(t95s)} s")
+        ax.plot([], [], style[name], color=colour[ratio], label=f"{name}, {ratio:g} Umf: t95 {', '.join(t95s)}")
     ax.axhline(level, color="grey", lw=0.8, ls="--")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("mixing entropy S_tot")

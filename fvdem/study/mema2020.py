@@ -660,14 +660,15 @@ def _figures(out: Path, runs: list) -> list:
     for family in sorted({r["family"] for r in runs}):
         mine = [r for r in runs if r["family"] == family]
         paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in mine], out / f"mixing_{family}.png",
-                                             names=[family] * len(mine), levels=levels))
+                                             names=[family] * len(mine), levels=levels,
+                                             ended=[r["status"] in ENDED for r in mine]))
     paired = {figure: sorted(_pairs(runs, first, second).items()) for figure, (first, second, _) in PAPER_PAIRS.items()}
     for figure, (first, second, velocities) in PAPER_PAIRS.items():
         pairs = [r for point, pair in paired[figure] for r in pair if velocities is None or _among(point, velocities)]
         if pairs:
             paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in pairs], out / f"{figure}_mixing.png",
                                                  names=[r["family"] for r in pairs], styles={first: "--", second: "-"},
-                                                 levels=levels))
+                                                 levels=levels, ended=[r["status"] in ENDED for r in pairs]))
     shown = [r for r in runs if _mixed_or_ended(r)]
     if shown:
         paper = {family: (t95, TERMINAL_FROM, f"{family}: the paper's terminal t95, about {t95:g} s")
