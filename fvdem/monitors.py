@@ -105,10 +105,18 @@ class RunawayWatch:
         touching = int(np.count_nonzero(top > box.upper[2] - 0.5 * (p.radius + p.half_length)))
         if touching > OUTLET_PILE_SHARE * p.count:
             self.warned_about.add("outlet")
+            ramp = gas.inlet_ramp
+            if ramp > 0.0 and model.time > ramp:  # thrown up by the fluidized bed, not lifted as a plug at the start
+                cause = (f"the fluidized bed threw them up to the roof after the inlet's {ramp:g} s ramp, and the gas "
+                         "leaving through them can hold them there, out of the bed's mixing (Mema et al.'s AR-4 beds at "
+                         "2.9 Umf in the 1.05 m column: docs/validation.md, stage 2); a taller domain.upper (its z) or "
+                         "a lower gas.u_over_umf keeps them in the bed")
+            else:
+                cause = ("the bed rose as a plug into the roof and will stay pinned there (a start under a packed bed "
+                         + (f"with the inlet at full speed within {ramp:g} s); a longer gas.inlet_ramp" if ramp > 0.0
+                            else "at full speed); start with gas.inlet_ramp (e.g. 1 s)") + " or a lower gas.u_over_umf")
             warnings.warn(f"t = {model.time:.4g} s: {touching} particles ({100 * touching / p.count:.1f} %) are "
-                          f"against the outlet at z = {box.upper[2]:g} m: the bed rose as a plug into the roof and will "
-                          "stay pinned there (a full-speed start under a packed bed); start with gas.inlet_ramp "
-                          "(e.g. 1 s) or a lower gas.u_over_umf", RuntimeWarning, stacklevel=4)
+                          f"against the outlet at z = {box.upper[2]:g} m: {cause}", RuntimeWarning, stacklevel=4)
 
     def gas(self, values: dict) -> None:
         """Stop a walled column whose gas runs far faster than anything drives it: the inlet's

@@ -212,3 +212,14 @@ def test_large_overlaps_and_particles_against_the_roof_are_warned_once_with_the_
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sim.watch.particles(dict(values, max_overlap_over_diameter=0.09))  # each once only
+    # the advice follows the cause: within an inlet ramp, a plug lifted at the start (a longer ramp); after it, a
+    # fluidized bed throwing particles up (a taller column or a lower velocity; the ramp is no remedy)
+    for ramp, steps, cause in ((1.0, 0, r"rose as a plug.*within 1 s\); a longer gas.inlet_ramp"),
+                               (1e-3, 3, r"threw them up to the roof after the inlet's 0.001 s ramp.*taller domain.upper")):
+        sim = fvdem.Simulation(_small_coupled(inlet_ramp=ramp, cfd_step=5e-4))
+        if steps:
+            sim.run(steps * sim.time_step)
+        p = sim.particles
+        p.position[:10, 2] = 0.2 - p.radius[:10]
+        with pytest.warns(RuntimeWarning, match=cause):
+            sim.watch.particles(sim.diagnostics())

@@ -190,7 +190,9 @@ class GasConfig:
                              doc="start-up: the inlet velocity rises linearly from 0 to inlet_velocity over this time "
                                  "[s] (0: full velocity from the start). Under a packed bed a full-speed start lifts it "
                                  "as one plug into the roof (issue 17: 16 % of a 32,500-sphere bed pinned there at "
-                                 "2.9 Umf); a 1 s ramp kept every particle off the roof")
+                                 "2.9 Umf); a 1 s ramp kept every particle off the roof there. It does not keep a "
+                                 "fluidized bed from throwing particles up later: Mema et al.'s AR-4 beds at 2.9 Umf "
+                                 "pinned 3 % of their rods at the 1.05 m outlet after the ramp (docs/validation.md)")
     umf: float | None = spec(None, unit="velocity", gt=0.0, optional=True,
                              doc="minimum fluidization velocity [m/s] that u_over_umf refers to (Mema et al. (2020): "
                                  "1.58 m/s AR-1, 1.7 m/s AR-4)")
