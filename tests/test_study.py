@@ -459,6 +459,15 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert grew["verdict"] == "does not hold" and grew["values"]["difference at 2.9 Umf"] == pytest.approx(-1.22)
     # AR-4 MP unmixed at 1.6: AR-1 minus AR-4 below 16.9 - 20, a size above 3.1, past the 1.22 at 2.9
     assert grew["values"]["differences up to 2 Umf"]["1.6"] == "< -3.1"
+    assert "note" not in grew
+    # a run whose bed stood at the outlet (rods pinned at the roof) counts, and each finding whose numbers hold its
+    # velocity names it in a note; one whose numbers do not (up to 2 Umf) is left without
+    roofed = campaign[:7] + [dict(row("ar4_mp", 2.9, 4.36), bed_at_roof=1.0)]
+    noted = found(roofed)
+    assert noted["the AR-1/AR-4 difference shrinks at the highest velocity"]["note"] == \
+        "bed at the outlet, particles pinned at the roof: ar4_mp at 2.9 Umf"
+    assert noted["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "does not hold"
+    assert "note" not in noted["AR-4"]
     closer = campaign[:7] + [row("ar4_mp", 2.9, 3.5)]  # 0.36 s at 2.9: smaller than everywhere up to 2.0
     assert found(closer)["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "holds"
     # a bound that does not reach the size at the top tells nothing there: open (AR-1 at 19.5 against AR-4 MP
@@ -984,6 +993,15 @@ def _fake_run(folder, family, ratio, entropy_rate, voidage):
         meshio.write(folder / f"gas_{snapshot:05d}.vtu", meshio.Mesh(points, [("hexahedron", cells)], cell_data={
             "voidage": [values], "superficial_velocity": [rising]}))
     write_pvd(folder / "gas.pvd", [(1.0 * k, f"gas_{k:05d}.vtu") for k in range(4)])
+
+
+def test_the_findings_page_shows_a_findings_note_beside_its_numbers():
+    from fvdem.study.reports import findings_page
+    rows = [{"status": "finished", "simulated_seconds": 6.4}, {"status": "running", "simulated_seconds": 1.0}]
+    page = findings_page("t", rows, [{"finding": "terminal t95", "verdict": "does not hold", "values": {"2.9": 4.3612},
+                                      "rule": "within 25 %", "note": "bed at the outlet: ar4_mp at 2.9 Umf"}], [])
+    assert "1 of 2 runs at their end, 1 on the way, 0 not started; 1 findings: 1 does not hold." in page
+    assert "| terminal t95 | does not hold | 2.9: 4.36 (bed at the outlet: ar4_mp at 2.9 Umf) | within 25 % |" in page
 
 
 def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_the_run_folders(tmp_path):

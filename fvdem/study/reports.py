@@ -144,7 +144,8 @@ _VERDICT_ORDER = {"holds": 0, "does not hold": 1, "open": 2}
 
 def findings_page(study, rows: list, findings: list, figures: list) -> str:
     """The findings as a Markdown page: where the study stands (runs at their end, on the way, not started), a
-    table of each finding's verdict, the numbers it was decided on (or why it is open) and its rule, and the
+    table of each finding's verdict, the numbers it was decided on (or why it is open; its ``note`` beside them)
+    and its rule, and the
     report's figures (linked by name: the page lies beside them)."""
     ended, started = _ran(rows)
     verdicts = {}
@@ -157,6 +158,7 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
              "", "| finding | verdict | numbers | rule |", "|---|---|---|---|"]
     for f in findings:
         numbers = describe_values(f["values"]) if f.get("values") is not None else f.get("why", "")
+        numbers += f" ({f['note']})" if f.get("note") else ""
         lines.append("| " + " | ".join(cell.replace("|", "/") for cell in (
             f["finding"], f["verdict"], numbers, f.get("rule", ""))) + " |")
     if figures:
