@@ -129,8 +129,9 @@ def study_schema() -> dict:
                 "axes": {"type": "object", "propertyNames": {"enum": case_keys()},
                          "additionalProperties": {"type": "array", "minItems": 1},
                          "description": "case keys and the values to sweep (every combination)"},
-                "exclude": {"type": "array", "items": {"type": "object"},
-                            "description": "runs to leave out: family and axis values they match"},
+                "exclude": {"type": "array", "items": {"type": "object", "minProperties": 1},
+                            "description": "runs to leave out: the family and axis values (each a value or a list) "
+                                           "they match"},
                 "durations": {"type": "array",
                               "items": {"type": "object", "required": ["duration"],
                                         "properties": {"duration": seconds}},

@@ -653,6 +653,25 @@ def test_points_tables_add_replicas_where_two_lie_within_their_spread_and_leave_
         ('"gas.u_over_umf" = 2.0\nreplica = 2', "points[0].replica", "did you mean")))
 
 
+def test_exclude_tables_leave_out_the_runs_they_match_and_a_wrong_one_is_refused(tmp_path):
+    """[[exclude]]: family and axis values, each one value or a list (as [[durations]] and [[points]]); a misspelt
+    key or a value the study lacks would leave out nothing, silently, and an empty table every run: refused."""
+    text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+    text = text.replace("[axes]", f'[families.b]\ncase = "{ROOT / "cases" / "demo.toml"}"\nbed = "small"\n\n[axes]')
+    path = tmp_path / "study.toml"
+    path.write_text(text + '\n[[exclude]]\nfamily = ["ar1", "b"]\n"gas.u_over_umf" = 2.9\n'
+                    '\n[[exclude]]\nfamily = "b"\n"gas.u_over_umf" = [2.0]\n')
+    assert [r.name for r in load_study(path, tmp_path / "out").runs] == ["ar1_u_over_umf2"]
+    _refused_tables(path, text, "exclude", (
+        ('famly = "ar1"', "exclude[0].famly", "did you mean 'family'"),
+        ('family = "ar9"', "exclude[0].family", "'ar9'"),
+        ('"gas.u_over_umf" = [2.0, 1.6]', "exclude[0].gas.u_over_umf", "[2.0, 1.6]")))
+    path.write_text(text + "\n[[exclude]]\n")
+    with pytest.raises(CaseError) as err:
+        load_study(path, tmp_path / "out")
+    assert "exclude[0] = {}" in str(err.value) and "every run" in str(err.value)
+
+
 def _refused_tables(path, text, heading, cases):
     """Each ``(table, key, shown)``: the study ``text`` with that ``[[heading]]`` table is refused, naming the key
     path and the value."""

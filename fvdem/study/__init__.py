@@ -19,7 +19,7 @@ them start from, the axes to vary, exclusions, the duration and replicas::
     duration = 0.08                    # optional: this family's own duration
     [axes]
     "gas.u_over_umf" = [2.0, 2.9]
-    [[exclude]]                        # drop the runs that match every key given
+    [[exclude]]                        # drop the runs that match every key given (each one value or a list)
     family = "ar1"
     "gas.u_over_umf" = 2.9
     [cluster]                          # optional: where the tasks run

@@ -147,10 +147,7 @@ def study_from_table(table: dict, path, out) -> Study:
             replica_beds[(bed_name, replica)] = name
         return replica_beds[(bed_name, replica)]
 
-    exclusions = table.get("exclude", [])
-    if not isinstance(exclusions, list) or not all(isinstance(e, dict) for e in exclusions):
-        _problem(problems, "exclude", exclusions, "a list of tables ([[exclude]] with family and axis values)")
-        exclusions = []
+    exclusions = _exclusions(table.get("exclude", []), families, axes, problems)
     # [[durations]] (duration) and [[points]] (duration, replicas): the last table that matches a run decides
     chosen = (_point_tables(table.get("durations", []), "durations", ("duration",), families, axes, problems)
               + _point_tables(table.get("points", []), "points", ("duration", "replicas"), families, axes, problems))
@@ -172,7 +169,7 @@ def study_from_table(table: dict, path, out) -> Study:
         family_replicas = _replicas(spec, f"families.{family}.replicas", replicas, problems)
         for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
             point = dict(zip(names, values))
-            if any(all((family if k == "family" else point.get(k)) == v for k, v in e.items()) for e in exclusions):
+            if any(excluded(family, point) for excluded in exclusions):
                 continue
             run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
             point_replicas = family_replicas
@@ -236,25 +233,55 @@ def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, pr
             values["duration"] = float(spec["duration"])
         if "replicas" in spec and "replicas" in keys:
             values["replicas"] = _replicas(spec, f"{where}.replicas", 1, problems)
-        bad = len(problems) > found
         selectors = {key: wanted for key, wanted in spec.items() if key not in keys}
-        for key, wanted in selectors.items():
-            known = list(families) if key == "family" else axes.get(key)
-            if known is None:
-                _problem(problems, f"{where}.{key}", wanted, f"unknown key{_did_you_mean(key, allowed)}; allowed: "
-                         + ", ".join(sorted(allowed)))
-                bad = True
-            elif any(w not in known for w in (wanted if isinstance(wanted, list) else [wanted])):
-                _problem(problems, f"{where}.{key}", wanted, "one of the study's values or a list of them: "
-                         + ", ".join(map(str, known)))
-                bad = True
+        bad = len(problems) > found or not _selectors_known(selectors, where, families, axes, allowed, problems)
         if not bad and not values:
             _problem(problems, where, spec, f"sets none of {', '.join(keys)}")
             bad = True
         if not bad:
-            out.append(((lambda family, point, selectors=selectors: all(
-                _matches(key, wanted, family if key == "family" else point.get(key))
-                for key, wanted in selectors.items())), values))
+            out.append((_selecting(selectors), values))
+    return out
+
+
+def _selectors_known(selectors: dict, where: str, families: dict, axes: dict, allowed, problems) -> bool:
+    """Whether each selector of a ``[[durations]]``, ``[[points]]`` or ``[[exclude]]`` table (``where``) is the
+    family or an axis key with one of the study's values or a list of them; each one that is not is a problem
+    (a misspelt key would select nothing, silently)."""
+    good = True
+    for key, wanted in selectors.items():
+        known = list(families) if key == "family" else axes.get(key)
+        if known is None:
+            _problem(problems, f"{where}.{key}", wanted, f"unknown key{_did_you_mean(key, allowed)}; allowed: "
+                     + ", ".join(sorted(allowed)))
+            good = False
+        elif any(w not in known for w in (wanted if isinstance(wanted, list) else [wanted])):
+            _problem(problems, f"{where}.{key}", wanted, "one of the study's values or a list of them: "
+                     + ", ".join(map(str, known)))
+            good = False
+    return good
+
+
+def _selecting(selectors: dict):
+    """``match(family, point)``: whether a run matches every selector (each one value or a list of them)."""
+    return lambda family, point: all(_matches(key, wanted, family if key == "family" else point.get(key))
+                                     for key, wanted in selectors.items())
+
+
+def _exclusions(tables, families: dict, axes: dict, problems) -> list:
+    """The ``[[exclude]]`` tables as ``match(family, point)`` functions: a run matching every key of one is not
+    run. Keys are ``family`` and the axis keys, each a value or a list of values; a key or value the study
+    lacks, and a table without keys (it would drop every run), are problems."""
+    if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
+        _problem(problems, "exclude", tables, "a list of tables ([[exclude]] with family and axis values)")
+        return []
+    out = []
+    for k, spec in enumerate(tables):
+        where = f"exclude[{k}]"
+        if not spec:
+            _problem(problems, where, spec, "the family and/or axis values of the runs to leave out (an empty "
+                     "table would leave out every run)")
+        elif _selectors_known(spec, where, families, axes, {"family", *axes}, problems):
+            out.append(_selecting(spec))
     return out
 
 
