@@ -222,6 +222,28 @@ def test_the_share_of_the_window_with_the_bed_top_at_the_outlet():
     assert _at_roof(series, None, ramp=1.0) is None and _at_roof({"time": time}, 1.05) is None
 
 
+def test_the_share_of_the_particles_pinned_at_the_outlet_at_the_end(tmp_path):
+    """``roof_share``: the column's top layer of the mixing grid at the last snapshot, from a run's snapshots or
+    its archived colour-by-layer record; 0 where the bed's top never reached the outlet (nothing read), and
+    where the record stops below the top layer."""
+    import json
+
+    import numpy as np
+    from fvdem.analysis.plots import COLOUR_LAYERS
+    from fvdem.study.mema2020 import _roof_share
+    time = np.round(np.arange(0, 6.001, 0.5), 2)
+    series = {"time": time, "bed_top": np.where(time >= 1.5, 1.05, 0.5)}
+    record = {"z_lower": 0.0, "layer_height": 0.03, "times": [0.0, 6.0],
+              "count": [[100] * 34 + [0], [90] * 34 + [40]], "fraction": [[0.5] * 35, [0.5] * 35]}
+    (tmp_path / COLOUR_LAYERS).write_text(json.dumps(record))
+    assert _roof_share(tmp_path, series, 1.05) == pytest.approx(40 / (90 * 34 + 40))
+    assert _roof_share(tmp_path, {**series, "bed_top": np.full_like(time, 0.6)}, 1.05) == 0.0  # never up there
+    short = {**record, "count": [[100] * 20, [100] * 20]}  # no snapshot reached above 0.6 m
+    (tmp_path / COLOUR_LAYERS).write_text(json.dumps(short))
+    assert _roof_share(tmp_path, series, 1.05) == 0.0
+    assert _roof_share(tmp_path / "none", series, 1.05) is None and _roof_share(tmp_path, series, None) is None
+
+
 def test_a_findings_numbers_read_as_one_line():
     from fvdem.study.reports import describe_values
     assert describe_values({"1.6": {"ar4_mp": "> 20 (not mixed)", "ar1": 16.901617}, "2": {"ar1": [1.7301, 2.0]}}) \
@@ -468,6 +490,9 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
         "bed at the outlet, particles pinned at the roof: ar4_mp at 2.9 Umf"
     assert noted["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "does not hold"
     assert "note" not in noted["AR-4"]
+    roofed[-1]["roof_share"] = 0.0469  # the share of its particles up there at the end, where the table has it
+    assert found(roofed)["the AR-1/AR-4 difference shrinks at the highest velocity"]["note"].endswith(
+        "ar4_mp at 2.9 Umf (4.7 % of the particles there at the end)")
     closer = campaign[:7] + [row("ar4_mp", 2.9, 3.5)]  # 0.36 s at 2.9: smaller than everywhere up to 2.0
     assert found(closer)["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "holds"
     # a bound that does not reach the size at the top tells nothing there: open (AR-1 at 19.5 against AR-4 MP

@@ -67,6 +67,25 @@ def _at_roof(series, roof: float | None, ramp: float | None = None):
     return _window_mean(at_roof, "bed_top", ramp)
 
 
+def _roof_share(folder: Path, series, roof: float | None):
+    """The share of the particles in the column's top layer of the mixing grid (0.03 m under the outlet on the
+    paper's grid) at the run's last particle snapshot (``colour_layer_record``): those pinned at the outlet (AR-4
+    MP at 2.9 Umf: 3.3 % of the rods at 3 s, 4.7 % at 6 s; SP at 2.6: 10 % from 1.5 s on). 0 where the bed's top
+    never reached the outlet (its snapshots are not read then); None without the column, the series or snapshots."""
+    if roof is None or series is None or "bed_top" not in series:
+        return None
+    if not len(series["bed_top"]) or float(series["bed_top"].max()) < roof - ROOF_MARGIN:
+        return 0.0
+    record = colour_layer_record(folder)
+    if record is None or not record["count"]:
+        return None
+    last = record["count"][-1]
+    reaches = record["z_lower"] + record["layer_height"] * len(last)  # the record stops at the highest layer reached
+    if not sum(last) or reaches < roof - 1e-9:
+        return 0.0
+    return last[-1] / sum(last)
+
+
 def _gas(folder: Path):
     """The gas settings of a run's case.toml; None without a readable one."""
     case = _folder_case(folder)
@@ -575,13 +594,21 @@ def _roof_note(finding: dict, rows: list, families) -> dict:
     which the reader of a verdict should know (AR-4 MP at 2.9 Umf: 3 % of the rods, all of the upper colour, held
     at the 1.05 m outlet from 1.5 to 4 s)."""
     used = _velocities_in(finding.get("values"))
-    roofed = sorted({(r["family"], r["gas.u_over_umf"]) for r in rows if r["family"] in families
-                     and any(abs(r["gas.u_over_umf"] - v) < 1e-9 for v in used)
-                     and r["status"] in ENDED and (r.get("bed_at_roof") or 0.0) >= 0.5})
+    roofed = {}
+    for r in rows:
+        if r["family"] in families and any(abs(r["gas.u_over_umf"] - v) < 1e-9 for v in used) \
+                and r["status"] in ENDED and (r.get("bed_at_roof") or 0.0) >= 0.5:
+            roofed.setdefault((r["family"], r["gas.u_over_umf"]), []).append(r.get("roof_share"))
     if not roofed:
         return finding
     return {**finding, "note": "bed at the outlet, particles pinned at the roof: " + ", ".join(
-        f"{family} at {v:g} Umf" for family, v in roofed)}
+        f"{family} at {v:g} Umf" + _shares(roofed[family, v]) for family, v in sorted(roofed))}
+
+
+def _shares(shares: list) -> str:
+    """The shares of the particles at the roof of a point's runs (``roof_share``), as a note's parenthesis."""
+    known = [f"{100 * x:.1f}" for x in shares if x is not None]
+    return f" ({', '.join(known)} % of the particles there at the end)" if known else ""
 
 
 def check_findings(rows) -> list:
@@ -726,7 +753,8 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     fluctuation, the bed height and expansion, the largest cell gas speed over the inlet velocity over the same
     window (a channel's mark: 3.1-3.5 in AR-1's beds at 1.6-2.9 Umf, 5.5-5.8 in AR-4 MP's at 1.6, 8 there from
     8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed), over the same
-    window the share of its samples with the bed's top at the outlet (``_at_roof``), the share of the rising gas
+    window the share of its samples with the bed's top at the outlet (``_at_roof``) and, at its last snapshot, the
+    share of its particles pinned there (``_roof_share``), the share of the rising gas
     in the corner and wall columns of the lower bed and the rods' mean |a_z|
     inside and in the corners (``channel_record``), the mixing entropy at the end and the one its bed would
     have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), the
@@ -745,6 +773,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
                                               else data.get("pressure_drop_std_over_weight")),
             "bed_height": _bed_surface(series, ramp), "bed_expansion": _bed_expansion(series, ramp),
             "bed_at_roof": _at_roof(series, None if case is None else case.domain.upper[2], ramp),
+            "roof_share": _roof_share(folder, series, None if case is None else case.domain.upper[2]),
             "gas_max_speed_over_inlet": (None if fastest is None or gas is None or not gas.inlet_velocity
                                          else fastest / gas.inlet_velocity),
             **(_channel_means(folder, ramp) if r["status"] != FAILED else {}),
