@@ -184,25 +184,32 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     families ran, with every replica of each; a family without its partner draws no pair."""
     import fvdem.analysis.plots as plots
     from fvdem.study import report
-    drawn, plot_mixing = {}, plots.plot_mixing
+    import fvdem.study.mema2020 as mema
+    drawn, plot_mixing, plot_void_fractions = {}, plots.plot_mixing, mema.plot_void_fractions
     monkeypatch.setattr(plots, "plot_mixing", lambda folders, path: drawn.setdefault(
         Path(path).name, [Path(f).name for f in folders]) and plot_mixing(folders, path))
+    monkeypatch.setattr(mema, "plot_void_fractions", lambda runs, path: drawn.setdefault(
+        Path(path).name, [Path(r["folder"]).name for r in runs]) and plot_void_fractions(runs, path))
     runs = []
     for family, ratio in (("ar1", 2.0), ("ar4_mp", 2.0), ("ar4_mp", 2.9), ("ar4_mp_drag", 2.9), ("ar1", 1.6),
-                          ("ar1_r2", 2.0)):
+                          ("ar1_r2", 2.0), ("ar1_r3", 2.0)):
         folder = tmp_path / "runs" / f"{family}_{ratio}"
-        family = family.removesuffix("_r2")
+        family = family.removesuffix("_r2").removesuffix("_r3")
         folder.mkdir(parents=True)
-        (folder / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.5,0.6\n1.0,0.97\n")
+        on_its_way = folder.name == "ar1_r3_2.0"  # a replica on its way, not yet mixed (in its start-up)
+        (folder / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.5,0.6\n"
+                                               + ("" if on_its_way else "1.0,0.97\n"))
         (folder / "case.toml").write_text(f'name = "{family}"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = {ratio}\n')
-        runs.append({"name": folder.name, "family": family, "status": "finished", "folder": str(folder),
-                     "t95": 1.0, "point": {"gas.u_over_umf": ratio}})
+        runs.append({"name": folder.name, "family": family, "status": "stopped" if on_its_way else "finished",
+                     "folder": str(folder), "t95": None if on_its_way else 1.0, "point": {"gas.u_over_umf": ratio}})
     (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
     names = sorted(Path(p).name for p in report(tmp_path))
     assert "fig3_mixing_2.png" in names and "fig7_void_fraction_2.png" in names and "fig9_mixing_2.9.png" in names
     assert not any(n.startswith(("fig3_mixing_1.6", "fig3_mixing_2.9", "fig9_mixing_2.png")) for n in names)
     assert {"mixing_ar1.png", "mixing_ar4_mp.png", "t95.png", "table.csv", "table.json"} <= set(names)
-    assert drawn["fig3_mixing_2.png"] == ["ar1_2.0", "ar1_r2_2.0", "ar4_mp_2.0"]  # both AR-1 replicas
+    assert drawn["fig3_mixing_2.png"] == ["ar1_2.0", "ar1_r2_2.0", "ar1_r3_2.0", "ar4_mp_2.0"]  # every AR-1 replica
+    # the void fractions of the fluidized bed: the replica on its way and not yet mixed waits
+    assert drawn["fig7_void_fraction_2.png"] == ["ar1_2.0", "ar1_r2_2.0", "ar4_mp_2.0"]
     # the paper's own charts: Fig. 3 at its 1.6, 1.7 and 2.9 Umf (none here ran both there), Fig. 9 a at every
     # velocity drag only ran
     assert "fig3_mixing.png" not in names and "fig9_mixing.png" in names
