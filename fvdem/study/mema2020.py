@@ -623,21 +623,21 @@ def check_findings(rows) -> list:
     otherwise). A run still on its way (or not started) counts once it has mixed; until then it is left
     out, not taken as unmixed."""
     planned, rows = rows, [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
-    findings = [
-        _roof_note(_compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
-                   rows, ("ar4_mp", "ar1")),
-        _roof_note(_gap_shrinks(rows, "ar1", "ar4_mp", "the AR-1/AR-4 difference shrinks at the highest velocity "
-                                "(2.9 Umf)", planned), rows, ("ar4_mp", "ar1")),
-        _roof_note(_sharp_drop(rows), rows, ("ar1",)),
-        _roof_note(_compare(rows, "ar4_mp", "ar4_mp_drag", lambda v: True, "lift and torque shorten AR-4 mixing"),
-                   rows, ("ar4_mp", "ar4_mp_drag")),
-        _roof_note(_gap_shrinks(rows, "ar4_mp_drag", "ar4_mp", "the effect of lift and torque shrinks at the highest "
-                                "velocity", planned), rows, ("ar4_mp", "ar4_mp_drag")),
-        _roof_note(_compare(rows, "ar4_mp", "ar4_sp", lambda v: v > 2.0,
-                            "MP closures widen the AR-1/AR-4 difference above 2 Umf (AR-4 MP mixes faster than SP)"),
-                   rows, ("ar4_mp", "ar4_sp")),
-        _roof_note(_slight(rows), rows, ("ar4_mp", "ar4_sp")),
-    ]
+    # each t95 finding with the families whose roofed runs it notes (``_roof_note``)
+    findings = [_roof_note(finding, rows, families) for finding, families in (
+        (_compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
+         ("ar4_mp", "ar1")),
+        (_gap_shrinks(rows, "ar1", "ar4_mp", "the AR-1/AR-4 difference shrinks at the highest velocity (2.9 Umf)",
+                      planned), ("ar4_mp", "ar1")),
+        (_sharp_drop(rows), ("ar1",)),
+        (_compare(rows, "ar4_mp", "ar4_mp_drag", lambda v: True, "lift and torque shorten AR-4 mixing"),
+         ("ar4_mp", "ar4_mp_drag")),
+        (_gap_shrinks(rows, "ar4_mp_drag", "ar4_mp", "the effect of lift and torque shrinks at the highest velocity",
+                      planned), ("ar4_mp", "ar4_mp_drag")),
+        (_compare(rows, "ar4_mp", "ar4_sp", lambda v: v > 2.0,
+                  "MP closures widen the AR-1/AR-4 difference above 2 Umf (AR-4 MP mixes faster than SP)"),
+         ("ar4_mp", "ar4_sp")),
+        (_slight(rows), ("ar4_mp", "ar4_sp")))]
     for family, paper in PAPER_TERMINAL_T95.items():
         t = _t95(rows, family)
         high = sorted(v for v in t if v >= TERMINAL_FROM)
