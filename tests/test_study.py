@@ -771,6 +771,17 @@ def test_the_index_lists_every_run_and_a_partial_invocation_keeps_the_others_res
     index = write_index(out, select_runs(study, [second]), [{"name": second, "status": "failed"}])
     assert {r["name"]: r["status"] for r in index["runs"]} == {first: "finished", second: "failed"}
     assert json.loads((out / "study.json").read_text())["runs"] == index["runs"]
+    # a run taken out of the study file (a replica or a point the study no longer plans) leaves the index where it
+    # never started, and stays where its folder holds something: nothing on disk goes unlisted
+    from dataclasses import replace
+    fewer = replace(study, runs=study.runs[:1])
+    assert [r["name"] for r in write_index(out, fewer)["runs"]] == [first]
+    write_index(out, study, [{"name": second, "status": "stopped", "folder": str(out / "runs" / second)}])
+    (out / "runs" / second).mkdir(parents=True)
+    assert [r["name"] for r in write_index(out, fewer)["runs"]] == [first, second]
+    # --only keeps the planned runs it leaves out, started or not
+    (out / "runs" / second).rmdir()
+    assert [r["name"] for r in write_index(out, select_runs(study, [first]))["runs"]] == [first, second]
 
 
 def test_runs_with_more_dem_steps_left_start_first(tmp_path):
@@ -1012,6 +1023,28 @@ def test_a_familys_own_replicas_and_a_wrong_count(tmp_path):
     with pytest.raises(CaseError) as err:
         load_study(path, tmp_path / "out")
     assert "families.ar1.replicas = 0" in str(err.value)
+
+
+def test_an_archive_drops_a_run_the_study_no_longer_lists_where_it_holds_nothing_of_it(tmp_path):
+    """A replica taken out of the study file before it started leaves the archive's index; a run the archive
+    holds results of stays, listed or not."""
+    from fvdem.study import archive
+    out, dest = tmp_path / "study", tmp_path / "archive"
+    folder = out / "runs" / "ar1_u_over_umf2"
+    _fake_run(folder, "ar1", 2.0, 0.5, [0.4, 0.42, 0.98, 1.0])
+    done = {"name": folder.name, "family": "ar1", "status": "finished", "folder": str(folder), "t95": None,
+            "point": {"gas.u_over_umf": 2.0}, "replica": 1}
+    ghost = {"name": "ar1_u_over_umf2_r2", "family": "ar1", "status": "pending", "folder": str(out / "runs" / "r2"),
+             "t95": None, "point": {"gas.u_over_umf": 2.0}, "replica": 2}
+    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [done, ghost]}))
+    archive(out, dest)
+    assert [r["name"] for r in json.loads((dest / "study.json").read_text())["runs"]] == [done["name"], ghost["name"]]
+    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [done]}))  # the study file dropped the replica
+    archive(out, dest)
+    assert [r["name"] for r in json.loads((dest / "study.json").read_text())["runs"]] == [done["name"]]
+    (out / "study.json").write_text(json.dumps({"study": "t", "runs": []}))  # nor the run: the archive keeps it
+    archive(out, dest)
+    assert [r["name"] for r in json.loads((dest / "study.json").read_text())["runs"]] == [done["name"]]
 
 
 def _fake_run(folder, family, ratio, entropy_rate, voidage):

@@ -248,6 +248,8 @@ def archive(out, dest) -> list:
             chosen.archive_extra(folder, target)
         runs[r["name"]] = {**r, "folder": f"runs/{r['name']}", "simulated_seconds": float(series["time"][-1])}
         written.append(target)
+    listed = {r["name"] for r in index["runs"]}  # a run the study no longer lists and the archive holds nothing of
+    runs = {n: r for n, r in runs.items() if n in listed or (dest / "runs" / n).is_dir()}  # (taken out of the file)
     write_text_atomic(dest / "study.json", json.dumps({**{k: v for k, v in index.items() if k != "runs"},
                                                       "archived_from": str(out), "runs": list(runs.values())},
                                                      indent=1) + "\n")

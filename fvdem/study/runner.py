@@ -380,10 +380,18 @@ def _pending(run: RunSpec) -> dict:
             "simulated_seconds": _simulated_so_far(Path(run.folder))}
 
 
+def _holds(out: Path, entry: dict) -> bool:
+    """Whether an index entry's run folder (absolute, or relative to the study folder ``out``) exists."""
+    folder = Path(entry.get("folder") or "")
+    return bool(entry.get("folder")) and (folder if folder.is_absolute() else out / folder).is_dir()
+
+
 def write_index(out, study: Study, results=(), description: str | None = None) -> dict:
     """``study.json``: every run of ``study`` with its latest result (``results``, else the one on
     record, else ``pending`` with the simulated seconds its folder holds), so that ``--report`` works
-    while a study runs. Returns the index written."""
+    while a study runs; of the runs on record that ``study`` does not list, those ``--only`` left out
+    (``study.planned``) and those whose folder exists stay, a run taken out of the study file before it
+    started goes. Returns the index written."""
     out = Path(out)
     path = out / "study.json"
     record = {}
@@ -395,9 +403,13 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     latest = {r["name"]: r for r in record.get("runs", [])}
     latest.update({r["name"]: r for r in results})
     names = [r.name for r in study.runs]
+    planned = set(study.planned or names)
+    # the index keeps the runs ``--only`` left out, and a run the study file no longer plans while its folder
+    # holds something (nothing on disk goes unlisted); one it no longer plans that never started (a replica or
+    # point taken out of the file) leaves it
     runs = ([{**(latest.get(r.name) or _pending(r)), "replica": r.replica, "duration": r.duration, "physics": r.physics}
              for r in study.runs]
-            + [r for n, r in latest.items() if n not in names])
+            + [r for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))])
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
              "report": study.report,
              **({"scheduler": description} if description else {}), "runs": runs}

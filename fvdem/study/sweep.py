@@ -57,6 +57,7 @@ class Study:
     runs: tuple
     cluster: dict
     report: str = DEFAULT_REPORT  # a registered report (``fvdem.study.reports``): the study's table, figures, findings
+    planned: tuple = ()  # the names of every run the study file plans, where ``runs`` is a selection (``--only``)
 
 
 def load_study(path, out) -> Study:
@@ -342,4 +343,4 @@ def select_runs(study: Study, only) -> Study:
                          f"{', '.join(r.name for r in study.runs)}"])
     runs = tuple(r for r in study.runs if r.name in set(only))
     beds = tuple(b for b in study.beds if b.name in {r.bed for r in runs})
-    return replace(study, runs=runs, beds=beds)
+    return replace(study, runs=runs, beds=beds, planned=study.planned or tuple(r.name for r in study.runs))
