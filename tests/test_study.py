@@ -1335,7 +1335,8 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     started and before the runs that need it."""
     from fvdem.study.runner import _bed_priority
     study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
-    assert len(study.runs) == 44 and {r.replica for r in study.runs} == {1, 2}
+    # 22 points, two replicas each, but one of AR-4 SP at 2.6 and 2.9 Umf (their pinned rods cap the entropy)
+    assert len(study.runs) == 42 and {r.replica for r in study.runs} == {1, 2}
     first = [_priority(r) for r in study.runs if r.replica == 1]
     second = [_priority(r) for r in study.runs if r.replica == 2]
     assert min(first) > max(second)
@@ -1534,16 +1535,16 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     queue = _Queue(study.runs, 2)
     ended, first = queue.take(0)
     assert ended == [] and [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s
-    assert queue.take(2) == ([], []) and len(queue) == 42
-    late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.9_r2")
+    assert queue.take(2) == ([], []) and len(queue) == 40
+    late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
-    assert [r.name for r in queue.take(1)[1]] == ["ar4_sp_u_over_umf2.9_r2"]  # begun elsewhere: in progress now
+    assert [r.name for r in queue.take(1)[1]] == ["ar4_sp_u_over_umf2.3_r2"]  # begun elsewhere: in progress now
     done = next(r for r in study.runs if r.name == "ar1_u_over_umf2.9_r1")  # at its end: handed on at once
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 40
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 38
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
