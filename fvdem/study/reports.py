@@ -21,7 +21,7 @@ from typing import Callable
 
 from ..io.locks import LOCK_FILE
 from ..io.run_folder import write_text_atomic
-from .tasks import ENDED, FAILED, IN_PROGRESS, _simulated_so_far
+from .tasks import ENDED, FAILED, IN_PROGRESS, _simulated_so_far, entry_folder
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,7 @@ def report(out) -> list:
     result = json.loads((out / "study.json").read_text())
     chosen = report_for(result.get("report"))
     for r in result["runs"]:  # an archive's folders are relative to it
-        r["folder"] = str(out / r["folder"]) if not Path(r["folder"]).is_absolute() else r["folder"]
+        r["folder"] = str(entry_folder(out, r))
     rows, drawn = [], []
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"
@@ -145,8 +145,7 @@ _VERDICT_ORDER = {"holds": 0, "does not hold": 1, "open": 2}
 def findings_page(study, rows: list, findings: list, figures: list) -> str:
     """The findings as a Markdown page: where the study stands (runs at their end, on the way, not started), a
     table of each finding's verdict, the numbers it was decided on (or why it is open; its ``note`` beside them)
-    and its rule, and the
-    report's figures (linked by name: the page lies beside them)."""
+    and its rule, and the report's figures (linked by name: the page lies beside them)."""
     ended, started = _ran(rows)
     verdicts = {}
     for f in findings:
@@ -367,7 +366,7 @@ def results(out, dest) -> Path:
     rows = json.loads((out / "table.json").read_text())
     commits, hosts, libraries, commands = {}, set(), set(), []
     for r in index["runs"]:
-        folder = Path(r["folder"]) if Path(r["folder"]).is_absolute() else out / r["folder"]
+        folder = entry_folder(out, r)
         summary = folder / "summary.json"
         made = json.loads(summary.read_text()).get("provenance", {}) if summary.exists() else {}
         commands.append(made.get("command") or "")

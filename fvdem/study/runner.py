@@ -17,8 +17,8 @@ from ..io.run_folder import write_text_atomic
 from .cluster import close_client, make_client, worker_count
 from .reports import report_for
 from .sweep import BedSpec, RunSpec, Study
-from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, prepare_bed,
-                    run_finished, run_task)
+from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, entry_folder,
+                    prepare_bed, run_finished, run_task)
 
 
 MAX_STALLS = 3  # paused attempts in a row that started and made no progress: the walltime is too short
@@ -381,9 +381,8 @@ def _pending(run: RunSpec) -> dict:
 
 
 def _holds(out: Path, entry: dict) -> bool:
-    """Whether an index entry's run folder (absolute, or relative to the study folder ``out``) exists."""
-    folder = Path(entry.get("folder") or "")
-    return bool(entry.get("folder")) and (folder if folder.is_absolute() else out / folder).is_dir()
+    """Whether an index entry's run folder (``entry_folder``) exists."""
+    return bool(entry.get("folder")) and entry_folder(out, entry).is_dir()
 
 
 def write_index(out, study: Study, results=(), description: str | None = None) -> dict:

@@ -16,7 +16,7 @@ from pathlib import Path
 from ..io.locks import describe_holder, holder
 from ..io.run_folder import CHECKPOINT
 from .reports import _series, report_for
-from .tasks import FAILED, _folder_case, _summary
+from .tasks import FAILED, _folder_case, _summary, entry_folder
 
 # a run's state in the status: at its end; a process writing it now; a checkpoint it resumes from; results
 # without a checkpoint (an archive's copy of a run in progress, a run stopped before its first checkpoint: it
@@ -59,7 +59,7 @@ def study_status(out) -> dict:
         used = rate if rate is not None else slowest
         family["left_core_hours"] = None if used is None else family["left_simulated_seconds"] * used / 3600.0
         del family["cpu_seconds"], family["simulated"]
-    _expect(runs, [_folder(out, r) for r in index["runs"]])
+    _expect(runs, [entry_folder(out, r) for r in index["runs"]])
     for name, family in families.items():
         family["expected_left_simulated_seconds"] = sum(r["expected_left"] for r in runs if r["family"] == name)
         used = family["cpu_per_simulated_second"] or slowest
@@ -104,11 +104,6 @@ def _expect(runs: list, folders: list) -> None:
         r["expected_left"] = max(0.0, end - held)
 
 
-def _folder(out: Path, r: dict) -> Path:
-    """A run's folder (study.json's entry ``r``: absolute, or relative to the study folder as in an archive)."""
-    return Path(r["folder"]) if Path(r["folder"]).is_absolute() else out / r["folder"]
-
-
 def _stop_after_mixed(folder: Path):
     """``time.stop_after_mixed`` [s] of a run's case (its folder's case.toml, read as a case: "2 s" is 2), or None."""
     case = _folder_case(folder)
@@ -118,7 +113,7 @@ def _stop_after_mixed(folder: Path):
 def _run_status(out: Path, r: dict, chosen) -> tuple:
     """One run's row (``study_status``), and the CPU seconds and simulated seconds its summary measured (None
     without), which the family's rate sums."""
-    folder = _folder(out, r)
+    folder = entry_folder(out, r)
     summary = _summary(folder) or {}
     series = _series(folder)
     held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)

@@ -41,6 +41,12 @@ def _summary(folder: Path) -> dict | None:
         return None
 
 
+def entry_folder(out, entry: dict) -> Path:
+    """A run's folder from its ``study.json`` entry: absolute in a study folder's index, relative to the folder
+    ``out`` in an archive's."""
+    return Path(entry["folder"]) if Path(entry["folder"]).is_absolute() else Path(out) / entry["folder"]
+
+
 def _folder_case(folder: Path):
     """The case a run folder's ``case.toml`` holds (``load_case``: units, defaults); None without a readable one."""
     try:
