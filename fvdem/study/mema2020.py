@@ -54,6 +54,12 @@ def _bed_expansion(series, ramp: float | None = None):
 
 
 ROOF_MARGIN = 0.01  # m: a bed top within this of the column's outlet is the outlet's
+ROOFED = 0.5  # a run whose bed top stood at the outlet for this share of the window or more: its bed was roofed
+
+
+def _roofed(row: dict) -> bool:
+    """Whether a table row's bed stood at the outlet for most of the window (``bed_at_roof``, ``_at_roof``)."""
+    return (row.get("bed_at_roof") or 0.0) >= ROOFED
 
 
 def _at_roof(series, roof: float | None, ramp: float | None = None):
@@ -545,7 +551,7 @@ def _expansion(rows) -> dict:
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf"
     ended = [r for r in rows if r["status"] in ENDED and r.get("bed_expansion") is not None]
     # a bed whose top stood at the outlet for most of the window has no height of its own there (``_at_roof``)
-    at_roof = [(r.get("bed_at_roof") or 0.0) >= 0.5 for r in ended]
+    at_roof = [_roofed(r) for r in ended]
     roofed = [r for r, roof in zip(ended, at_roof) if roof]
     measured = [r for r, roof in zip(ended, at_roof) if not roof]
     a, b = _by_velocity(measured, "ar4_mp", "bed_expansion"), _by_velocity(measured, "ar1", "bed_expansion")
@@ -597,7 +603,7 @@ def _roof_note(finding: dict, rows: list, families) -> dict:
     roofed = {}
     for r in rows:
         if r["family"] in families and any(abs(r["gas.u_over_umf"] - v) < 1e-9 for v in used) \
-                and r["status"] in ENDED and (r.get("bed_at_roof") or 0.0) >= 0.5:
+                and r["status"] in ENDED and _roofed(r):
             roofed.setdefault((r["family"], r["gas.u_over_umf"]), []).append(r.get("roof_share"))
     if not roofed:
         return finding
@@ -744,11 +750,15 @@ def _figures(out: Path, runs: list) -> list:
         paths.append(plot_void_fraction_panels(panels, out / "fig7_void_fraction.png"))
     for figure in PAPER_PAIRS:
         for point, pair in paired[figure]:
-            tag = "_".join(f"{v:g}" for v in point)
-            paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{tag}.png"))
+            paths.append(plot_mixing([Path(r["folder"]) for r in pair], out / f"{figure}_mixing_{_tag(point)}.png"))
     for point, pair in fluidized:
-        paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{'_'.join(f'{v:g}' for v in point)}.png"))
+        paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{_tag(point)}.png"))
     return paths
+
+
+def _tag(point: tuple) -> str:
+    """An axes point as a file name's part: its values joined by ``_`` (2.0 and 1.6 -> "2_1.6")."""
+    return "_".join(f"{v:g}" for v in point)
 
 
 def _columns(r: dict, folder: Path, data: dict, series) -> dict:
@@ -764,7 +774,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     void fractions' binarity and the largest overlap's median, 99th percentile and maximum (``_overlaps``)."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
     case = _folder_case(folder)
-    gas = None if case is None else case.gas
+    gas, roof = (None, None) if case is None else (case.gas, case.domain.upper[2])
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
     fastest = _window_mean(series, "gas_max_speed", ramp)
     t95 = r.get("t95")
@@ -775,8 +785,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
                                               if "bed_pressure_drop_std_second_half" in data
                                               else data.get("pressure_drop_std_over_weight")),
             "bed_height": _bed_surface(series, ramp), "bed_expansion": _bed_expansion(series, ramp),
-            "bed_at_roof": _at_roof(series, None if case is None else case.domain.upper[2], ramp),
-            "roof_share": _roof_share(folder, series, None if case is None else case.domain.upper[2]),
+            "bed_at_roof": _at_roof(series, roof, ramp), "roof_share": _roof_share(folder, series, roof),
             "gas_max_speed_over_inlet": (None if fastest is None or gas is None or not gas.inlet_velocity
                                          else fastest / gas.inlet_velocity),
             **(_channel_means(folder, ramp) if r["status"] != FAILED else {}),
