@@ -500,6 +500,23 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     roofed[-1]["roof_share"] = 0.0469  # the share of its particles up there at the end, where the table has it
     assert found(roofed)["the AR-1/AR-4 difference shrinks at the highest velocity"]["note"].endswith(
         "ar4_mp at 2.9 Umf (4.7 % of the particles there at the end)")
+    # the same point in a taller column (family "ar4_mp_tall", the stage-1 run: 2.64 s in 2.1 m, 4.36 s under the
+    # 1.05 m roof) stands for ar4_mp's runs there once it has mixed: AR-1 minus AR-4 0.5 s at 2.9 against 0.6 s at 2.0
+    roofed[-1]["column_height"] = 1.05
+    tall = dict(row("ar4_mp_tall", 2.9, 2.64), column_height=2.1)
+    unroofed = found(roofed + [tall])["the AR-1/AR-4 difference shrinks at the highest velocity"]
+    assert unroofed["verdict"] == "holds" and unroofed["values"]["difference at 2.9 Umf"] == pytest.approx(0.5)
+    assert unroofed["note"] == ("t95 from a column without the roof: ar4_mp at 2.9 Umf from the taller column "
+                                "(ar4_mp_tall); in the paper's 1.05 m column t95 4.36 s (4.7 % of the particles "
+                                "pinned at its outlet at the end)")
+    assert found(roofed + [tall])["terminal t95 of ar4_mp about 2.3 s"]["values"] == {"2.9": 2.64}
+    assert "note" not in found(roofed + [tall])["AR-4"]  # up to 2 Umf: the paper's column's runs
+    # a taller run on its way and not yet mixed is left out: the paper's column's runs stand until it has mixed
+    going = dict(tall, t95=None, status="stopped", simulated_seconds=1.5)
+    waits = found(roofed + [going])["the AR-1/AR-4 difference shrinks at the highest velocity"]
+    assert waits["verdict"] == "does not hold" and waits["values"]["difference at 2.9 Umf"] == pytest.approx(-1.22)
+    assert waits["note"] == "bed at the outlet, particles pinned at the roof: ar4_mp at 2.9 Umf (4.7 % of the " \
+                            "particles there at the end)"
     closer = campaign[:7] + [row("ar4_mp", 2.9, 3.5)]  # 0.36 s at 2.9: smaller than everywhere up to 2.0
     assert found(closer)["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "holds"
     # a bound that does not reach the size at the top tells nothing there: open (AR-1 at 19.5 against AR-4 MP
@@ -1335,8 +1352,12 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     started and before the runs that need it."""
     from fvdem.study.runner import _bed_priority
     study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
-    # 22 points, two replicas each, but one of AR-4 SP at 2.6 and 2.9 Umf (their pinned rods cap the entropy)
-    assert len(study.runs) == 42 and {r.replica for r in study.runs} == {1, 2}
+    # 22 points, two replicas each, but one of AR-4 SP at 2.6 and 2.9 Umf (their pinned rods cap the entropy) and
+    # of AR-4 MP at 2.9 in the paper's 1.05 m column; AR-4 MP and SP at 2.9 and MP drag only at 2.9 in a 2.1 m
+    # column, two replicas each (MP drag only there alone)
+    assert len(study.runs) == 45 and {r.replica for r in study.runs} == {1, 2}
+    assert {r.name for r in study.runs if "tall" in r.name} == {
+        f"ar4_{family}_tall_u_over_umf2.9_r{k}" for family in ("mp", "mp_drag", "sp") for k in (1, 2)}
     first = [_priority(r) for r in study.runs if r.replica == 1]
     second = [_priority(r) for r in study.runs if r.replica == 2]
     assert min(first) > max(second)
@@ -1535,7 +1556,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     queue = _Queue(study.runs, 2)
     ended, first = queue.take(0)
     assert ended == [] and [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s
-    assert queue.take(2) == ([], []) and len(queue) == 40
+    assert queue.take(2) == ([], []) and len(queue) == 43
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
@@ -1544,7 +1565,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 38
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 41
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
@@ -1587,7 +1608,7 @@ def test_folders_started_under_another_definition_are_named_with_the_keys_that_d
         Path(spec.folder).mkdir(parents=True)
         case = load_case(spec.case, {**spec.overrides, **more})
         Path(spec.folder, "case.toml").write_text(to_toml(case))
-    for name in ("ar1_u_over_umf2_r1", "ar4_sp_u_over_umf1.6_r1", "ar4_mp_u_over_umf2.9_r2"):
+    for name in ("ar1_u_over_umf2_r1", "ar4_sp_u_over_umf1.6_r1", "ar4_mp_u_over_umf2.6_r2"):
         started(runs[name], **{"time.end": 30.0, "output.snapshot_interval": 1.0,
                                "particles.initial_state": str(tmp_path / "elsewhere" / "final_state.npz")})
     started(beds["ar1_r2"])

@@ -611,10 +611,56 @@ def _roof_note(finding: dict, rows: list, families) -> dict:
         f"{family} at {v:g} Umf" + _shares(roofed[family, v]) for family, v in sorted(roofed))}
 
 
-def _shares(shares: list) -> str:
+TALL = "_tall"  # a family "<name>_tall": <name>'s closures and bed in a column taller than the paper's 1.05 m
+
+
+def _tall_columns(rows) -> tuple[list, dict]:
+    """``rows`` with the runs of each family "<name>_tall" (``TALL``) counted as <name>'s at their velocities, in
+    place of <name>'s runs there, and ``{(name, U/Umf): [the runs set aside]}``. A study runs a point in a taller
+    column where the paper's 1.05 m outlet held the start-up surge's particles (AR-4 MP at 2.9 Umf: t95 4.36 s
+    with 4.7 % of the rods pinned at the outlet, 2.64 s in a 2.1 m column; docs/validation.md, stage 1): the
+    findings are of the bed, and a column whose roof holds a layer of one colour mixes the column's particles,
+    not the bed's. A taller run counts once it has mixed or ended (``check_findings``); until then the
+    paper's column's runs stand. The set-aside runs stay in the table, and in each finding's note
+    (``_column_note``)."""
+    tall = {(r["family"][:-len(TALL)], r.get("gas.u_over_umf")) for r in rows if r["family"].endswith(TALL)}
+    kept, aside = [], {}
+    for r in rows:
+        if r["family"].endswith(TALL):
+            kept.append({**r, "family": r["family"][:-len(TALL)], "column": r["family"]})
+        elif (r["family"], r.get("gas.u_over_umf")) in tall:
+            aside.setdefault((r["family"], r["gas.u_over_umf"]), []).append(r)
+        else:
+            kept.append(r)
+    return kept, aside
+
+
+def _column_note(finding: dict, aside: dict, families) -> dict:
+    """``finding`` with a note (after ``_roof_note``'s) naming the points of ``families``, at a velocity its
+    numbers hold, whose t95 came from a taller column (``_tall_columns``), with what the paper's column's runs
+    set aside there measured: t95 (or their end, unmixed) and the share of their particles pinned at its
+    outlet."""
+    used = _velocities_in(finding.get("values"))
+    points = sorted(key for key in aside if key[0] in families and any(abs(key[1] - v) < 1e-9 for v in used))
+    if not points:
+        return finding
+    parts = []
+    for family, v in points:
+        runs = aside[family, v]
+        heights = sorted({r["column_height"] for r in runs if r.get("column_height")})
+        measured = ", ".join(f"{r['t95']:.3g} s" if r.get("t95") is not None else
+                             f"not mixed by {r.get('simulated_seconds') or 0:g} s" for r in runs)
+        parts.append(f"{family} at {v:g} Umf from the taller column ({family}{TALL}); in the paper's "
+                     + (f"{heights[0]:g} m " if len(heights) == 1 else "") + f"column t95 {measured}"
+                     + _shares([r.get("roof_share") for r in runs], "pinned at its outlet at the end"))
+    note = "t95 from a column without the roof: " + "; ".join(parts)
+    return {**finding, "note": f"{finding['note']}; {note}" if finding.get("note") else note}
+
+
+def _shares(shares: list, where: str = "there at the end") -> str:
     """The shares of the particles at the roof of a point's runs (``roof_share``), as a note's parenthesis."""
     known = [f"{100 * x:.1f}" for x in shares if x is not None]
-    return f" ({', '.join(known)} % of the particles there at the end)" if known else ""
+    return f" ({', '.join(known)} % of the particles {where})" if known else ""
 
 
 def check_findings(rows) -> list:
@@ -629,8 +675,14 @@ def check_findings(rows) -> list:
     otherwise). A run still on its way (or not started) counts once it has mixed; until then it is left
     out, not taken as unmixed."""
     planned, rows = rows, [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
-    # each t95 finding with the families whose roofed runs it notes (``_roof_note``)
-    findings = [_roof_note(finding, rows, families) for finding, families in (
+    planned = _tall_columns(planned)[0]  # a taller column's runs in place of the paper's column's at their points
+    rows, aside = _tall_columns(rows)
+
+    def noted(finding, families):  # the roofed runs counted, the paper's column's runs set aside (the notes)
+        return _column_note(_roof_note(finding, rows, families), aside, families)
+
+    # each t95 finding with the families whose roofed or set-aside runs it notes
+    findings = [noted(finding, families) for finding, families in (
         (_compare(rows, "ar4_mp", "ar1", lambda v: v <= 2.0, "AR-4 (MP) mixes faster than AR-1 up to 2 Umf"),
          ("ar4_mp", "ar1")),
         (_gap_shrinks(rows, "ar1", "ar4_mp", "the AR-1/AR-4 difference shrinks at the highest velocity (2.9 Umf)",
@@ -676,7 +728,7 @@ def check_findings(rows) -> list:
             spread = (max(means.values()) - min(means.values())) / max(means.values())
             mine.append({"finding": change, "verdict": "holds" if spread < 0.2 else "does not hold",
                          "values": means, "rule": "spread below 20 %"})
-        findings += [_roof_note(f, rows, (family,)) for f in mine]
+        findings += [noted(f, (family,)) for f in mine]
     findings.append(_expansion(rows))
     findings.append(_compare_binarity(rows))
     if any(r["family"] == "ar1_paper" for r in rows):  # fvdem's own check, where a study runs that family
@@ -762,14 +814,14 @@ def _tag(point: tuple) -> str:
 
 
 def _columns(r: dict, folder: Path, data: dict, series) -> dict:
-    """t95 and t95 counted from when the inlet passes Umf, the bed's pressure drop over W/A and its
-    fluctuation, the bed height and expansion, the largest cell gas speed over the inlet velocity over the same
-    window (a channel's mark: 3.1-3.5 in AR-1's beds at 1.6-2.9 Umf, 5.5-5.8 in AR-4 MP's at 1.6, 8 there from
-    8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed), over the same
-    window the share of its samples with the bed's top at the outlet (``_at_roof``) and, at its last snapshot, the
-    share of its particles pinned there (``_roof_share``), the share of the rising gas
-    in the corner and wall columns of the lower bed and the rods' mean |a_z|
-    inside and in the corners (``channel_record``), the mixing entropy at the end and the one its bed would
+    """t95 and t95 counted from when the inlet passes Umf, the column's height (its outlet), the bed's pressure
+    drop over W/A and its fluctuation, the bed height and expansion, the largest cell gas speed over the inlet
+    velocity over the same window (a channel's mark: 3.1-3.5 in AR-1's beds at 1.6-2.9 Umf, 5.5-5.8 in AR-4 MP's
+    at 1.6, 8 there from 8 s on, where corner and wall channels of void fraction 0.9-1 carry the gas up the bed),
+    over the same window the share of its samples with the bed's top at the outlet (``_at_roof``) and, at its last
+    snapshot, the share of its particles pinned there (``_roof_share``), the share of the rising gas in the corner
+    and wall columns of the lower bed and the rods' mean |a_z| inside and in the corners (``channel_record``),
+    the mixing entropy at the end and the one its bed would
     have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), the
     void fractions' binarity and the largest overlap's median, 99th percentile and maximum (``_overlaps``)."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
@@ -778,7 +830,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
     fastest = _window_mean(series, "gas_max_speed", ramp)
     t95 = r.get("t95")
-    return {"t95": t95, "inlet_passes_umf": passes,
+    return {"t95": t95, "inlet_passes_umf": passes, "column_height": roof,
             "t95_from_inlet_at_umf": None if t95 is None or passes is None else t95 - passes,
             "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
             "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
