@@ -214,6 +214,28 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     # velocity drag only ran
     assert "fig3_mixing.png" not in names and "fig9_mixing.png" in names
     assert "fig7_void_fraction.png" in names  # the paper's Fig. 7 panels: 2.0 Umf is one
+    # AR-4 MP at 2.9 in a taller column (family ar4_mp_tall): once mixed, it stands for ar4_mp's run there in the
+    # pairs, as in the findings (the roofed run keeps its own chart); on its way, it waits
+    for family, on_its_way in (("ar1", False), ("ar4_mp_tall", False)):
+        folder = tmp_path / "runs" / f"{family}_2.9"
+        folder.mkdir(parents=True)
+        (folder / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.5,0.6\n1.0,0.97\n")
+        (folder / "case.toml").write_text(f'name = "{family}"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = 2.9\n')
+        runs.append({"name": folder.name, "family": family, "status": "finished", "folder": str(folder), "t95": 1.0,
+                     "point": {"gas.u_over_umf": 2.9}})
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    drawn.clear()
+    names = sorted(Path(p).name for p in report(tmp_path))
+    assert drawn["fig3_mixing_2.9.png"] == ["ar1_2.9", "ar4_mp_tall_2.9"]
+    assert drawn["fig9_mixing_2.9.png"] == ["ar4_mp_drag_2.9", "ar4_mp_tall_2.9"]
+    assert drawn["fig7_void_fraction_2.9.png"] == ["ar1_2.9", "ar4_mp_tall_2.9"]
+    assert "mixing_ar4_mp.png" in names and "mixing_ar4_mp_tall.png" in names
+    runs[-1] = {**runs[-1], "status": "stopped", "t95": None}
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    drawn.clear()
+    (tmp_path / "runs" / "ar4_mp_tall_2.9" / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.5,0.6\n")
+    report(tmp_path)
+    assert drawn["fig3_mixing_2.9.png"] == ["ar1_2.9", "ar4_mp_2.9"]
 
 
 def test_the_share_of_the_window_with_the_bed_top_at_the_outlet():

@@ -188,7 +188,7 @@ def plot_void_fraction_panels(panels: dict, path, below=0.3):
         for r in runs:
             record = void_fraction_record(r["folder"], below)
             if record is not None:
-                by.setdefault(r["family"], []).append(record)
+                by.setdefault(_column(r), []).append(record)
         for family, records in by.items():
             edges = np.asarray(records[0]["edges"])
             cells = np.array([rec["cells"] for rec in records], float)
@@ -614,22 +614,23 @@ def _roof_note(finding: dict, rows: list, families) -> dict:
 TALL = "_tall"  # a family "<name>_tall": <name>'s closures and bed in a column taller than the paper's 1.05 m
 
 
-def _tall_columns(rows) -> tuple[list, dict]:
-    """``rows`` with the runs of each family "<name>_tall" (``TALL``) counted as <name>'s at their velocities, in
-    place of <name>'s runs there, and ``{(name, U/Umf): [the runs set aside]}``. A study runs a point in a taller
+def _tall_columns(rows, at=lambda r: r.get("gas.u_over_umf")) -> tuple[list, dict]:
+    """``rows`` with the runs of each family "<name>_tall" (``TALL``) counted as <name>'s at their point (``at``:
+    a table row's U/Umf, or an index entry's axes values), in place of <name>'s runs there (each keeps its own
+    family's name as ``column``), and ``{(name, point): [the runs set aside]}``. A study runs a point in a taller
     column where the paper's 1.05 m outlet held the start-up surge's particles (AR-4 MP at 2.9 Umf: t95 4.36 s
     with 4.7 % of the rods pinned at the outlet, 2.64 s in a 2.1 m column; docs/validation.md, stage 1): the
     findings are of the bed, and a column whose roof holds a layer of one colour mixes the column's particles,
     not the bed's. A taller run counts once it has mixed or ended (``check_findings``); until then the
     paper's column's runs stand. The set-aside runs stay in the table, and in each finding's note
     (``_column_note``)."""
-    tall = {(r["family"][:-len(TALL)], r.get("gas.u_over_umf")) for r in rows if r["family"].endswith(TALL)}
+    tall = {(r["family"][:-len(TALL)], at(r)) for r in rows if r["family"].endswith(TALL)}
     kept, aside = [], {}
     for r in rows:
         if r["family"].endswith(TALL):
             kept.append({**r, "family": r["family"][:-len(TALL)], "column": r["family"]})
-        elif (r["family"], r.get("gas.u_over_umf")) in tall:
-            aside.setdefault((r["family"], r["gas.u_over_umf"]), []).append(r)
+        elif (r["family"], at(r)) in tall:
+            aside.setdefault((r["family"], at(r)), []).append(r)
         else:
             kept.append(r)
     return kept, aside
@@ -772,7 +773,9 @@ def _figures(out: Path, runs: list) -> list:
     """Mixing entropy per family, a colour per velocity (Fig. 2), t95 against U/Umf (Fig. 4: the runs that mixed
     or ended), the paper's pairs at its velocities on one chart each (``PAPER_PAIRS``: ``fig3_mixing.png``,
     ``fig9_mixing.png``), and at each velocity both families ran: AR-1 against AR-4 MP run by run (Fig. 3) with
-    their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only against drag + lift + torque (Fig. 9)."""
+    their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only against drag + lift + torque (Fig. 9). The
+    pairs take a taller column's runs that mixed or ended for their family's, as the findings do
+    (``_tall_columns``)."""
     from ..analysis.plots import plot_mixing, plot_mixing_by_velocity, plot_t95
     paths = []
     levels = [r["point"]["gas.u_over_umf"] for r in runs if "gas.u_over_umf" in r.get("point", {})] or None
@@ -781,12 +784,18 @@ def _figures(out: Path, runs: list) -> list:
         paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in mine], out / f"mixing_{family}.png",
                                              names=[family] * len(mine), levels=levels,
                                              ended=[r["status"] in ENDED for r in mine]))
-    paired = {figure: sorted(_pairs(runs, first, second).items()) for figure, (first, second, _) in PAPER_PAIRS.items()}
+    # the paper's pairs as the findings take them: a taller column's runs that mixed or ended for their family's
+    # at their point (``_tall_columns``), named as their own family on the charts
+    standing = [r for r in runs if not r["family"].endswith(TALL) or _mixed_or_ended(r)]
+    as_found = _tall_columns(standing, lambda r: tuple(r.get("point", {}).values()))[0]
+    paired = {figure: sorted(_pairs(as_found, first, second).items())
+              for figure, (first, second, _) in PAPER_PAIRS.items()}
     for figure, (first, second, velocities) in PAPER_PAIRS.items():
         pairs = [r for point, pair in paired[figure] for r in pair if velocities is None or _among(point, velocities)]
         if pairs:
+            styles = {first: "--", second: "-", first + TALL: "--", second + TALL: "-"}
             paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in pairs], out / f"{figure}_mixing.png",
-                                                 names=[r["family"] for r in pairs], styles={first: "--", second: "-"},
+                                                 names=[_column(r) for r in pairs], styles=styles,
                                                  levels=levels, ended=[r["status"] in ENDED for r in pairs]))
     shown = [r for r in runs if _mixed_or_ended(r)]
     if shown:
@@ -796,7 +805,7 @@ def _figures(out: Path, runs: list) -> list:
                               references=paper))
     # the void fractions of the fluidized bed (Fig. 7): a run on its way and not yet mixed may still be in its
     # start-up (the second half of 0.8 s is the packed bed), so those runs wait, as in the findings
-    fluidized = sorted(_pairs(shown, *PAPER_PAIRS["fig3"][:2]).items())
+    fluidized = sorted(_pairs([r for r in as_found if _mixed_or_ended(r)], *PAPER_PAIRS["fig3"][:2]).items())
     panels = {point[0]: pair for point, pair in fluidized if len(point) == 1 and _among(point, FIG7_VELOCITIES)}
     if panels:
         paths.append(plot_void_fraction_panels(panels, out / "fig7_void_fraction.png"))
@@ -806,6 +815,11 @@ def _figures(out: Path, runs: list) -> list:
     for point, pair in fluidized:
         paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{_tag(point)}.png"))
     return paths
+
+
+def _column(r: dict) -> str:
+    """A run's family as a chart names it: a taller column's own (``_tall_columns``' ``column``) or its family."""
+    return r.get("column", r["family"])
 
 
 def _tag(point: tuple) -> str:
