@@ -227,16 +227,35 @@ def _within_spread(a: list, b: list) -> str | None:
     if max(len(a), len(b)) < 2:
         return None
     means = [sum(v) / len(v) for v in (a, b)]
-    var = [sum((x - m) ** 2 for x in v) / (len(v) - 1) if len(v) > 1 else None for v, m in zip((a, b), means)]
-    var = [x if x else y for x, y in zip(var, reversed(var))]  # none or 0 (replicas all counted at one end): unknown
     told = (f"means {means[0]:.3g} ({', '.join(f'{x:.3g}' for x in a)}) against {means[1]:.3g} "
             f"({', '.join(f'{x:.3g}' for x in b)})")
-    if not all(var):  # no spread known on either side: the CLOSE rule
+    var = _variances(a, b)
+    if var is None:  # no spread known on either side: the CLOSE rule
         return None if _gap(*means) >= CLOSE else f"{told}, within {100 * CLOSE:.0f} % and no spread known"
     error = (var[0] / len(a) + var[1] / len(b)) ** 0.5
     if abs(means[0] - means[1]) > SPREAD * error:
         return None
     return f"{told}, within {SPREAD:g} standard errors ({SPREAD * error:.3g})"
+
+
+def _variances(a: list, b: list) -> list | None:
+    """The sample variances of two families' replica values at one velocity, a family of one run, or of replicas
+    all counted at one end (variance 0: its spread unknown, not absent), taking the other's (the same chaos);
+    None where neither has one."""
+    means = [sum(v) / len(v) for v in (a, b)]
+    var = [sum((x - m) ** 2 for x in v) / (len(v) - 1) if len(v) > 1 else None for v, m in zip((a, b), means)]
+    var = [x if x else y for x, y in zip(var, reversed(var))]
+    return var if all(var) else None
+
+
+def _difference_error(a: list, b: list) -> float:
+    """The standard error of the difference of two families' means at one velocity (``a``, ``b``: their replica
+    values), from the replicas' spread (``_variances``); without one, the error at which ``SPREAD`` errors are
+    ``CLOSE`` of the larger mean (the rule for values without replicas: a difference within 10 % is noise)."""
+    var = _variances(a, b)
+    if var is None:
+        return CLOSE * max(sum(a) / len(a), sum(b) / len(b)) / SPREAD
+    return (var[0] / len(a) + var[1] / len(b)) ** 0.5
 
 
 def _untold(v, a: list, b: list, gap: float, pair: str) -> str | None:
@@ -524,21 +543,31 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
     if a[top][1] or b[top][1]:
         return {"finding": claim, "verdict": "open", "why": f"not mixed by the run's end at {top:g} Umf (too short)"}
     gap = abs(a[top][0] - b[top][0])
+    counted = {f: _counted(rows, f) for f in (slow, fast)}
+    error = {v: _difference_error(counted[slow][v], counted[fast][v]) for v in (top, *low)}
     gaps, told, untold = {}, {}, []
     for v in low:
         difference = a[v][0] - b[v][0]  # exact, or a lower (slow unmixed) or upper (fast unmixed) bound
         bound = difference if a[v][1] else -difference if b[v][1] else None  # a lower bound of the size, if > 0
         gaps[f"{v:g}"] = f"> {difference:.3g}" if a[v][1] else f"< {difference:.3g}" if b[v][1] else difference
-        if bound is None:
+        noise = SPREAD * math.hypot(error[top], error[v])  # of the two sizes' difference
+        if bound is None and abs(abs(difference) - gap) > noise:
             told[v] = gap < abs(difference)
-        elif gap < bound:
+        elif bound is None:
+            untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
+                          f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; more "
+                          "replicas would tell: [[points]])")
+        elif gap < bound - noise:
             told[v] = True
         else:
             untold.append(f"{v:g} Umf: {slow} minus {fast} only bounded ({gaps[f'{v:g}']} s), not past the "
-                          f"{gap:.3g} s at {top:g} Umf (run the unmixed longer: [[durations]])")
+                          f"{gap:.3g} s at {top:g} Umf by {SPREAD:g} standard errors ({noise:.3g} s; run the unmixed "
+                          "longer: [[durations]])")
     values = {f"difference at {top:g} Umf": a[top][0] - b[top][0], "differences up to 2 Umf": gaps}
-    rule = (f"t95 of {slow} minus {fast}: smaller in size at {top:g} Umf than at every velocity up to 2 Umf (where a "
-            "run there did not mix, its bound decides only where it exceeds that size)")
+    rule = (f"t95 of {slow} minus {fast}: smaller in size at {top:g} Umf than at every velocity up to 2 Umf, by "
+            f"more than {SPREAD:g} standard errors of the two differences (from the replicas' spread; without "
+            f"replicas, {100 * CLOSE:.0f} % of the larger t95 for {SPREAD:g} errors); where a run there did not "
+            "mix, its bound decides only where it exceeds that size so")
     return _at_every_velocity(claim, told, untold, values, rule)
 
 

@@ -144,8 +144,8 @@ _VERDICT_ORDER = {"holds": 0, "does not hold": 1, "open": 2}
 
 def findings_page(study, rows: list, findings: list, figures: list) -> str:
     """The findings as a Markdown page: where the study stands (runs at their end, on the way, not started), a
-    table of each finding's verdict, the numbers it was decided on (or why it is open; its ``note`` beside them)
-    and its rule, and the report's figures (linked by name: the page lies beside them)."""
+    table of each finding's verdict, the numbers it was decided on and, where it is open, why (its ``note``
+    beside them) and its rule, and the report's figures (linked by name: the page lies beside them)."""
     ended, started = _ran(rows)
     verdicts = {}
     for f in findings:
@@ -156,7 +156,8 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
                  f"{n} {v}" for v, n in sorted(verdicts.items(), key=lambda kv: _VERDICT_ORDER.get(kv[0], 3))) + ".",
              "", "| finding | verdict | numbers | rule |", "|---|---|---|---|"]
     for f in findings:
-        numbers = describe_values(f["values"]) if f.get("values") is not None else f.get("why", "")
+        numbers = "; ".join(part for part in (describe_values(f["values"]) if f.get("values") is not None else "",
+                                              f.get("why", "")) if part)
         numbers += f" ({f['note']})" if f.get("note") else ""
         lines.append("| " + " | ".join(cell.replace("|", "/") for cell in (
             f["finding"], f["verdict"], numbers, f.get("rule", ""))) + " |")
