@@ -18,10 +18,10 @@
 # Extra arguments go to fvdem study: after a setting of the study file changed, run it once as
 # `studies/campaign.sh --supersede` (the runs of the old setting move to superseded/, nothing is deleted).
 # Two runs at a time, one numba thread each (more threads than free cores stall OpenMP: docs/benchmarks.md).
-# Stage 1 (studies/mema2020_stage1.toml) runs beside it, one run at a time, while it has runs left (since
-# 2026-12-04, twenty-third session, its AR-4 MP run at 2.9 Umf in a 2.1 m column; its ended runs come back from
-# docs/data/mema2020_stage1 and are skipped; once all have ended it exits at once). Where it stands: fvdem study ~/fvdem-runs/mema2020_stage1
-# --status; archive: --archive docs/data/mema2020_stage1.
+# Stage 1 (studies/mema2020_stage1.toml) runs beside it, one run at a time, while it has runs left (its ended
+# runs come back from docs/data/mema2020_stage1 and are skipped; once all have ended it exits at once: every one
+# had by 2026-12-04, twenty-fourth session, its last the 2.1 m column's AR-4 runs at 2.6-2.9 Umf). Where it
+# stands: fvdem study ~/fvdem-runs/mema2020_stage1 --status; archive: --archive docs/data/mema2020_stage1.
 # Timing anything else while it runs: pause the whole campaign (kill -STOP -- -<its process group>, then
 # -CONT). Dask's scheduler restarts a worker that has not sent a heartbeat for its worker-ttl (default 5 min),
 # killing its run back to the last checkpoint; that happened once after a series of pauses (2026-12-03), so
