@@ -190,6 +190,12 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
         Path(path).name, [Path(f).name for f in folders]) and plot_mixing(folders, path))
     monkeypatch.setattr(mema, "plot_void_fractions", lambda runs, path: drawn.setdefault(
         Path(path).name, [Path(r["folder"]).name for r in runs]) and plot_void_fractions(runs, path))
+    plot_t95, named = plots.plot_t95, {}
+
+    def t95_chart(folders, path, names, **kw):  # each run's name on Fig. 4, and the runs set aside
+        named.update(zip([Path(f).name for f in folders], names), aside=kw.get("aside"))
+        return plot_t95(folders, path, names=names, **kw)
+    monkeypatch.setattr(plots, "plot_t95", t95_chart)
     runs = []
     for family, ratio in (("ar1", 2.0), ("ar4_mp", 2.0), ("ar4_mp", 2.9), ("ar4_mp_drag", 2.9), ("ar1", 1.6),
                           ("ar1_r2", 2.0), ("ar1_r3", 2.0)):
@@ -230,6 +236,10 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     assert drawn["fig9_mixing_2.9.png"] == ["ar4_mp_drag_2.9", "ar4_mp_tall_2.9"]
     assert drawn["fig7_void_fraction_2.9.png"] == ["ar1_2.9", "ar4_mp_tall_2.9"]
     assert "mixing_ar4_mp.png" in names and "mixing_ar4_mp_tall.png" in names
+    # Fig. 4: AR-4 MP's line through the taller column's run, the paper's column's run there a cross beside it
+    aside = "ar4_mp: the paper's column, set aside (particles pinned at its outlet)"
+    assert named["ar4_mp_tall_2.9"] == "ar4_mp" and named["ar4_mp_2.0"] == "ar4_mp" and named["ar4_mp_2.9"] == aside
+    assert named["aside"] == {aside: "ar4_mp"}
     runs[-1] = {**runs[-1], "status": "stopped", "t95": None}
     (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
     drawn.clear()

@@ -290,22 +290,33 @@ def mixing_times(runs, level=MIXED, names=None) -> dict:
             for name, rows in groups.items()}
 
 
-def plot_t95(runs, path, level=MIXED, names=None, references=None) -> Path:
+def plot_t95(runs, path, level=MIXED, names=None, references=None, aside=None) -> Path:
     """Mixing time t95 against U/Umf, one line per case name (or per ``names``, the group of each
     run; Mema et al. (2020) Fig. 4). Each run is a marker (replicas side by side at their U/Umf); the line
     joins the means of the replicas at each U/Umf. A run that has not reached the level is an open triangle
     at its end time (t95 is later), and a mean that counts one so is open too: a lower bound. ``references``
     (name -> ``(t95, from U/Umf, label)``): a published value drawn as a dashed line in that name's colour from
-    that U/Umf on (the paper's terminal mixing times)."""
+    that U/Umf on (the paper's terminal mixing times). ``aside`` (name -> another name): runs drawn as crosses
+    in the other's colour, without a line (runs a study's findings set aside, shown beside those they count)."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     bounds = False
     colours = {}
-    for name, rows in mixing_times(runs, level, names).items():
+    aside = aside or {}
+    groups = mixing_times(runs, level, names)
+    for name, rows in sorted(groups.items(), key=lambda item: item[0] in aside):  # lines first: their colours
         by = {}
         for ratio, t, end in rows:
             by.setdefault(ratio, []).append((t, end))
         ratios = sorted(by)
+        if name in aside:
+            colour = colours.get(aside[name], "0.4")
+            for r in ratios:
+                for t, end in by[r]:
+                    ax.plot(r, end if t is None else t, "^" if t is None else "x", mfc="none", color=colour, ms=6)
+                    bounds = bounds or t is None
+            ax.plot([], [], "x", color=colour, ms=6, label=name)
+            continue
         means = [float(np.mean([t if t is not None else end for t, end in by[r]])) for r in ratios]
         replicas = max(len(v) for v in by.values()) > 1
         line, = ax.plot(ratios, means, "-")

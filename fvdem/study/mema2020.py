@@ -830,8 +830,12 @@ def _figures(out: Path, runs: list) -> list:
     if shown:
         paper = {family: (t95, TERMINAL_FROM, f"{family}: the paper's terminal t95, about {t95:g} s")
                  for family, t95 in PAPER_TERMINAL_T95.items()}
-        paths.append(plot_t95([Path(r["folder"]) for r in shown], out / "t95.png", names=[r["family"] for r in shown],
-                              references=paper))
+        # each family's line through the values its findings count (a taller column's runs in place of the paper's
+        # column's at their point, ``_tall_columns``), the runs set aside as crosses in its colour
+        counted, set_aside = _tall_columns(shown, lambda r: tuple(r.get("point", {}).values()))
+        drawn = counted + [{**r, "family": _set_aside(family)} for (family, _), rs in set_aside.items() for r in rs]
+        paths.append(plot_t95([Path(r["folder"]) for r in drawn], out / "t95.png", names=[r["family"] for r in drawn],
+                              references=paper, aside={_set_aside(family): family for family, _ in set_aside}))
     # the void fractions of the fluidized bed (Fig. 7): a run on its way and not yet mixed may still be in its
     # start-up (the second half of 0.8 s is the packed bed), so those runs wait, as in the findings
     fluidized = sorted(_pairs([r for r in as_found if _mixed_or_ended(r)], *PAPER_PAIRS["fig3"][:2]).items())
@@ -844,6 +848,11 @@ def _figures(out: Path, runs: list) -> list:
     for point, pair in fluidized:
         paths.append(plot_void_fractions(pair, out / f"fig7_void_fraction_{_tag(point)}.png"))
     return paths
+
+
+def _set_aside(family: str) -> str:
+    """The t95 chart's name of a family's runs set aside for a taller column's (``_tall_columns``)."""
+    return f"{family}: the paper's column, set aside (particles pinned at its outlet)"
 
 
 def _column(r: dict) -> str:
