@@ -106,12 +106,17 @@ def _inlet_passes_umf(gas) -> float | None:
     return gas.inlet_ramp / gas.u_over_umf if gas.u_over_umf >= 1.0 else None
 
 
+def _point(run: dict) -> tuple:
+    """A study index entry's axes values (its ``point``), in the study's axes order."""
+    return tuple(run.get("point", {}).values())
+
+
 def _pairs(runs, first, second) -> dict:
     """``{axes values: (runs of family first, then of family second)}`` where both ran at those values, every
     replica of each (the figures draw the spread, not one replica)."""
     by = {}
     for r in runs:
-        by.setdefault(tuple(r.get("point", {}).values()), {}).setdefault(r["family"], []).append(r)
+        by.setdefault(_point(r), {}).setdefault(r["family"], []).append(r)
     return {point: (*fam[first], *fam[second]) for point, fam in by.items() if first in fam and second in fam}
 
 
@@ -816,7 +821,7 @@ def _figures(out: Path, runs: list) -> list:
     # the paper's pairs as the findings take them: a taller column's runs that mixed or ended for their family's
     # at their point (``_tall_columns``), named as their own family on the charts
     standing = [r for r in runs if not r["family"].endswith(TALL) or _mixed_or_ended(r)]
-    as_found = _tall_columns(standing, lambda r: tuple(r.get("point", {}).values()))[0]
+    as_found = _tall_columns(standing, _point)[0]
     paired = {figure: sorted(_pairs(as_found, first, second).items())
               for figure, (first, second, _) in PAPER_PAIRS.items()}
     for figure, (first, second, velocities) in PAPER_PAIRS.items():
@@ -832,7 +837,7 @@ def _figures(out: Path, runs: list) -> list:
                  for family, t95 in PAPER_TERMINAL_T95.items()}
         # each family's line through the values its findings count (a taller column's runs in place of the paper's
         # column's at their point, ``_tall_columns``), the runs set aside as crosses in its colour
-        counted, set_aside = _tall_columns(shown, lambda r: tuple(r.get("point", {}).values()))
+        counted, set_aside = _tall_columns(shown, _point)
         drawn = counted + [{**r, "family": _set_aside(family)} for (family, _), rs in set_aside.items() for r in rs]
         paths.append(plot_t95([Path(r["folder"]) for r in drawn], out / "t95.png", names=[r["family"] for r in drawn],
                               references=paper, aside={_set_aside(family): family for family, _ in set_aside}))
