@@ -1256,7 +1256,7 @@ def test_the_t95_chart_shows_runs_that_mixed_or_ended_not_runs_on_their_way(tmp_
     import fvdem.analysis.plots as plots
     from fvdem.study import report
     drawn = []
-    monkeypatch.setattr(plots, "plot_t95", lambda folders, path, names=None, references=None: drawn.append(
+    monkeypatch.setattr(plots, "plot_t95", lambda folders, path, names=None, references=None, aside=None: drawn.append(
         sorted(Path(f).name for f in folders)) or path)
     out = tmp_path / "study"
     mixed, slow = out / "runs" / "mixed", out / "runs" / "slow"
