@@ -234,10 +234,9 @@ def _within_spread(a: list, b: list) -> str | None:
     means = [sum(v) / len(v) for v in (a, b)]
     told = (f"means {means[0]:.3g} ({', '.join(f'{x:.3g}' for x in a)}) against {means[1]:.3g} "
             f"({', '.join(f'{x:.3g}' for x in b)})")
-    var = _variances(a, b)
-    if var is None:  # no spread known on either side: the CLOSE rule
+    error = _replica_error(a, b)
+    if error is None:  # no spread known on either side: the CLOSE rule
         return None if _gap(*means) >= CLOSE else f"{told}, within {100 * CLOSE:.0f} % and no spread known"
-    error = (var[0] / len(a) + var[1] / len(b)) ** 0.5
     if abs(means[0] - means[1]) > SPREAD * error:
         return None
     return f"{told}, within {SPREAD:g} standard errors ({SPREAD * error:.3g})"
@@ -253,14 +252,18 @@ def _variances(a: list, b: list) -> list | None:
     return var if all(var) else None
 
 
-def _difference_error(a: list, b: list) -> float:
+def _replica_error(a: list, b: list) -> float | None:
     """The standard error of the difference of two families' means at one velocity (``a``, ``b``: their replica
-    values), from the replicas' spread (``_variances``); without one, the error at which ``SPREAD`` errors are
-    ``CLOSE`` of the larger mean (the rule for values without replicas: a difference within 10 % is noise)."""
+    values), ``sqrt(var_a / n_a + var_b / n_b)`` from the replicas' spread (``_variances``); None without one."""
     var = _variances(a, b)
-    if var is None:
-        return CLOSE * max(sum(a) / len(a), sum(b) / len(b)) / SPREAD
-    return (var[0] / len(a) + var[1] / len(b)) ** 0.5
+    return None if var is None else (var[0] / len(a) + var[1] / len(b)) ** 0.5
+
+
+def _difference_error(a: list, b: list) -> float:
+    """``_replica_error``, or without a spread known the error at which ``SPREAD`` errors are ``CLOSE`` of the
+    larger mean (the rule for values without replicas: a difference within 10 % is noise)."""
+    error = _replica_error(a, b)
+    return CLOSE * max(sum(a) / len(a), sum(b) / len(b)) / SPREAD if error is None else error
 
 
 def _untold(v, a: list, b: list, gap: float, pair: str) -> str | None:
@@ -636,8 +639,7 @@ def _roof_note(finding: dict, rows: list, families) -> dict:
     used = _velocities_in(finding.get("values"))
     roofed = {}
     for r in rows:
-        if r["family"] in families and any(abs(r["gas.u_over_umf"] - v) < 1e-9 for v in used) \
-                and r["status"] in ENDED and _roofed(r):
+        if r["family"] in families and _among((r["gas.u_over_umf"],), used) and r["status"] in ENDED and _roofed(r):
             roofed.setdefault((r["family"], r["gas.u_over_umf"]), []).append(r.get("roof_share"))
     if not roofed:
         return finding
@@ -676,7 +678,7 @@ def _column_note(finding: dict, aside: dict, families) -> dict:
     set aside there measured: t95 (or their end, unmixed) and the share of their particles pinned at its
     outlet."""
     used = _velocities_in(finding.get("values"))
-    points = sorted(key for key in aside if key[0] in families and any(abs(key[1] - v) < 1e-9 for v in used))
+    points = sorted(key for key in aside if key[0] in families and _among(key[1:], used))
     if not points:
         return finding
     parts = []
@@ -822,6 +824,8 @@ def _figures(out: Path, runs: list) -> list:
     # at their point (``_tall_columns``), named as their own family on the charts
     standing = [r for r in runs if not r["family"].endswith(TALL) or _mixed_or_ended(r)]
     as_found = _tall_columns(standing, _point)[0]
+    # Figs. 4 and 7 as the findings take them too, of the runs that mixed or ended, and the runs set aside
+    shown, set_aside = _tall_columns([r for r in standing if _mixed_or_ended(r)], _point)
     paired = {figure: sorted(_pairs(as_found, first, second).items())
               for figure, (first, second, _) in PAPER_PAIRS.items()}
     for figure, (first, second, velocities) in PAPER_PAIRS.items():
@@ -831,19 +835,17 @@ def _figures(out: Path, runs: list) -> list:
             paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in pairs], out / f"{figure}_mixing.png",
                                                  names=[_column(r) for r in pairs], styles=styles,
                                                  levels=levels, ended=[r["status"] in ENDED for r in pairs]))
-    shown = [r for r in runs if _mixed_or_ended(r)]
     if shown:
         paper = {family: (t95, TERMINAL_FROM, f"{family}: the paper's terminal t95, about {t95:g} s")
                  for family, t95 in PAPER_TERMINAL_T95.items()}
         # each family's line through the values its findings count (a taller column's runs in place of the paper's
         # column's at their point, ``_tall_columns``), the runs set aside as crosses in its colour
-        counted, set_aside = _tall_columns(shown, _point)
-        drawn = counted + [{**r, "family": _set_aside(family)} for (family, _), rs in set_aside.items() for r in rs]
+        drawn = shown + [{**r, "family": _set_aside(family)} for (family, _), rs in set_aside.items() for r in rs]
         paths.append(plot_t95([Path(r["folder"]) for r in drawn], out / "t95.png", names=[r["family"] for r in drawn],
                               references=paper, aside={_set_aside(family): family for family, _ in set_aside}))
     # the void fractions of the fluidized bed (Fig. 7): a run on its way and not yet mixed may still be in its
     # start-up (the second half of 0.8 s is the packed bed), so those runs wait, as in the findings
-    fluidized = sorted(_pairs([r for r in as_found if _mixed_or_ended(r)], *PAPER_PAIRS["fig3"][:2]).items())
+    fluidized = sorted(_pairs(shown, *PAPER_PAIRS["fig3"][:2]).items())
     panels = {point[0]: pair for point, pair in fluidized if len(point) == 1 and _among(point, FIG7_VELOCITIES)}
     if panels:
         paths.append(plot_void_fraction_panels(panels, out / "fig7_void_fraction.png"))
