@@ -446,6 +446,23 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert near["verdict"] == "holds" and near["values"]["2"] == pytest.approx(1 / 9)
     short = slight([unmixed("ar4_sp", 2.0, 6.0, 0.9), row("ar4_mp", 2.0, 5.5)])  # SP > 6: the gap > 9 %, unknown
     assert short["verdict"] == "open" and "at 2 Umf" in short["why"]
+    # replicas within their spread yet alike: the difference of the means with twice its standard error within
+    # 10 % of the larger mean decides against a claimed order (AR-4 MP 4.3 s against AR-1 4.35: 0.05 s faster on
+    # the means, within 2 standard errors, 0.224 s; 0.274 s at most, within 0.435 s: not faster). Wider spreads,
+    # a single run each, or a bound (an unmixed run counted at its end) tell no likeness: open
+    alike = check_findings([row("ar1", 2.0, 4.3), row("ar1", 2.0, 4.4), row("ar4_mp", 2.0, 4.2),
+                            row("ar4_mp", 2.0, 4.4)])[0]
+    assert alike["verdict"] == "does not hold"
+    assert alike["values"]["2"]["alike"] == ("alike: the means 4.3 and 4.35 differ by 0.05, with 2 standard errors "
+                                             "at most 0.274, within 10 % of the larger (0.435)")
+    wide = check_findings([row("ar1", 2.0, 4.0), row("ar1", 2.0, 4.7), row("ar4_mp", 2.0, 4.0),
+                           row("ar4_mp", 2.0, 4.6)])[0]
+    assert wide["verdict"] == "open" and "replicas' spread" in wide["why"]
+    bounded = check_findings([dict(row("ar1", 2.0, 4.3), simulated_seconds=8.0),
+                              dict(row("ar1", 2.0, 4.4), simulated_seconds=8.0),
+                              unmixed("ar4_mp", 2.0, 4.35, 0.9),
+                              dict(row("ar4_mp", 2.0, 4.4), simulated_seconds=8.0)])[0]
+    assert bounded["verdict"] == "open" and "alike" not in bounded["values"]["2"]
     # one velocity where it is not faster decides, whatever another leaves open
     mixed_up = check_findings([row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 4.0), row("ar1", 1.7, 3.0),
                                row("ar4_mp", 1.7, 2.9)])[0]
@@ -464,6 +481,22 @@ def test_replicas_all_counted_at_one_end_have_an_unknown_spread_not_none():
     # sqrt(0.32 / 2 + 0.32 / 2) = 0.566, so 3.1 s apart is told and 0.9 s is not
     assert _within_spread([20.0, 20.0], [16.5, 17.3]) is None
     assert "within 2 standard errors (1.13)" in _within_spread([18.0, 18.0], [16.5, 17.3])
+
+
+def test_values_within_their_spread_are_alike_only_where_the_spread_rules_out_a_difference_of_ten_percent():
+    """The equivalence side of the spread rule: 4.23 (4.21, 4.25) against 4.29 (4.30, 4.28) lie 0.06 apart, the
+    standard error of the difference sqrt(0.0008 / 2 + 0.0002 / 2) = 0.0224: 0.105 with two of them, well within 10
+    % of 4.29; 4.0 / 4.7 against 4.0 / 4.6 are within their spread but not alike (0.05 + 2 x 0.46 > 0.435); one run
+    each tells nothing of likeness, and one run takes the other family's variance."""
+    from fvdem.study.mema2020 import _alike
+    assert _alike([4.21, 4.25], [4.30, 4.28]).startswith("alike: the means 4.23 and 4.29 differ by 0.06, with 2 "
+                                                         "standard errors at most 0.105")
+    assert _alike([4.0, 4.7], [4.0, 4.6]) is None
+    assert _alike([4.21], [4.30]) is None
+    assert _alike([4.2, 4.3], [4.25]) is not None  # sqrt(0.005 / 2 + 0.005): 0.05 + 0.173 < 0.43
+    # more replicas of the same spread tell two values 3 % apart alike, where two each did not
+    assert _alike([4.0, 4.3], [4.15, 4.45]) is None
+    assert _alike([4.0, 4.3] * 4, [4.15, 4.45] * 4) is not None
 
 
 def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expansion_findings():
@@ -572,6 +605,17 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
         row("ar4_mp", 2.0, 4.81), row("ar4_mp", 2.0, 4.91), row("ar4_mp", 2.9, 3.5), row("ar4_mp", 2.9, 3.6)]
     closer = found(replicated)["the AR-1/AR-4 difference shrinks at the highest velocity"]
     assert closer["verdict"] == "holds" and closer["values"]["difference at 2.9 Umf"] == pytest.approx(-0.36)
+    # sizes alike: AR-1 minus AR-4 MP 0.6 s at 2.0 against 0.5 s at 2.9 (each with a replicas' standard error of
+    # 0.0707 s), 0.1 s apart, with twice its noise (0.2 s) 0.3 s, within 10 % of the larger t95 (0.485 s): it did
+    # not shrink from 2.0 Umf, though it did from 1.6 and 1.7
+    same = campaign[:2] + campaign[4:6] + [
+        row("ar1", 2.0, 4.2), row("ar1", 2.0, 4.3), row("ar1", 2.9, 3.1), row("ar1", 2.9, 3.2),
+        row("ar4_mp", 2.0, 4.8), row("ar4_mp", 2.0, 4.9), row("ar4_mp", 2.9, 2.6), row("ar4_mp", 2.9, 2.7)]
+    kept = found(same)["the AR-1/AR-4 difference shrinks at the highest velocity"]
+    assert kept["verdict"] == "does not hold"
+    assert kept["values"]["differences up to 2 Umf"]["2"] == (
+        "-0.6, alike in size: 0.6 s against 0.5 s at 2.9 Umf, with 2 standard errors (0.2 s) within 10 % of the "
+        "larger t95 (0.485 s)")
     # a bound that does not reach the size at the top by its noise tells nothing there: open (AR-1 at 19.5 against
     # AR-4 MP unmixed at 20: a size above 0.5 only, against 0.36 at 2.9)
     near = [row("ar1", 1.6, 19.5, end=20.0)] + replicated[1:]
@@ -594,12 +638,17 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert found(mp + [row("ar4_sp", 2.9, 2.9)])["MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] \
         == "open"
     # with replicas, the difference of the means against twice its standard error decides: 2.85 against 2.8
-    # (0.05 within 0.17: open), 2.825 against 2.975 (0.15 beyond 0.071: holds, though within 10 %), 2.825
-    # against 2.65 (does not hold)
+    # (0.05 within 0.224, and with it at most 0.274 apart, within 10 % of 2.85: alike, so MP is not faster),
+    # 2.85 against 2.8 from 3.0 and 2.6 (within 0.412, not alike: open), 2.825 against 2.975 (0.15 beyond 0.071:
+    # holds, though within 10 %), 2.825 against 2.65 (does not hold)
     replicas = mp + [row("ar4_mp", 2.9, 2.9), row("ar4_sp", 2.9, 2.9), row("ar4_sp", 2.9, 2.7)]  # 2.85 against 2.8
+    alike = found(replicas)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]
+    assert alike["verdict"] == "does not hold" and alike["values"]["2.9"]["alike"].startswith("alike: the means 2.85")
+    replicas = mp + [row("ar4_mp", 2.9, 2.9), row("ar4_sp", 2.9, 3.0), row("ar4_sp", 2.9, 2.6)]
     overlapping = found(replicas)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]
     assert overlapping["verdict"] == "open"
-    assert "(ar4_mp against ar4_sp, t95 [s]: means 2.85 (2.8, 2.9) against 2.8 (2.9, 2.7)" in overlapping["why"]
+    assert "(ar4_mp against ar4_sp, t95 [s]: means 2.85 (2.8, 2.9) against 2.8 (3, 2.6), within 2 standard errors " \
+        "(0.412)" in overlapping["why"]
     apart = mp + [row("ar4_mp", 2.9, 2.85), row("ar4_sp", 2.9, 2.95), row("ar4_sp", 2.9, 3.0)]
     assert found(apart)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] == "holds"
     behind = mp + [row("ar4_mp", 2.9, 2.85), row("ar4_sp", 2.9, 2.6), row("ar4_sp", 2.9, 2.7)]
@@ -624,6 +673,10 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert spread["verdict"] == "open"
     assert "(AR-4 MP against AR-1: means 2.1 (1.63, 2.57) against 1.74 (1.73, 1.75), within 2 standard errors " \
         "(0.94)" in spread["why"]
+    # alike: 1.75 (1.72, 1.78) against 1.74 (1.73, 1.75), within 10 % with twice the error: not more
+    even = erupted[:2] + [row("ar4_mp", 1.6, None, height=h) for h in (1.72, 1.78)]
+    alike = found(even)["AR-4 beds expand more than AR-1 at the same U/Umf"]
+    assert alike["verdict"] == "does not hold" and alike["values"]["1.6"]["alike"].startswith("alike: the means 1.75")
     more = erupted + [row("ar4_mp", 1.6, None, height=h) for h in (2.3, 2.4, 2.2, 2.35)]
     assert found(more)["AR-4 beds expand more than AR-1 at the same U/Umf"]["verdict"] == "holds"
     # one velocity told against the claim decides, whatever another leaves within the noise

@@ -228,7 +228,8 @@ def _within_spread(a: list, b: list) -> str | None:
     takes the other's: the same chaos; so does a family whose variance is 0, its replicas all unmixed and
     counted at the same end, where the spread is unknown, not absent). More replicas shrink the error, so an
     order that exists is told in the end. Returns the means and the bound as text, or None where the difference
-    is beyond it, or neither family has replicas (the ``CLOSE`` rule then)."""
+    is beyond it, or neither family has replicas (the ``CLOSE`` rule then). Within it the two may yet be alike
+    (``_alike``), which decides against a claimed order."""
     if max(len(a), len(b)) < 2:
         return None
     means = [sum(v) / len(v) for v in (a, b)]
@@ -240,6 +241,26 @@ def _within_spread(a: list, b: list) -> str | None:
     if abs(means[0] - means[1]) > SPREAD * error:
         return None
     return f"{told}, within {SPREAD:g} standard errors ({SPREAD * error:.3g})"
+
+
+def _alike(a: list, b: list) -> str | None:
+    """Whether two families' replica values at one velocity, whose order lies within their spread
+    (``_within_spread``), are alike: the difference of the means with ``SPREAD`` standard errors either side
+    (``_replica_error``) within ``CLOSE`` of the larger mean, the difference a single run's chaos leaves
+    untold (an equivalence test, two one-sided at about 98 % each). A claimed order then does not hold there:
+    a difference of ``CLOSE`` or more is ruled out. Without a spread known, None: one run each tells nothing of
+    likeness. The values must be t95s that are known (no run counted at its end: a lower bound bounds one side
+    only). More replicas shrink the error, so two values that are alike are told alike in the end, as an order
+    that exists is told: with enough replicas every comparison decides. Returns the numbers as text, or None."""
+    error = _replica_error(a, b)
+    if error is None:
+        return None
+    means = [sum(v) / len(v) for v in (a, b)]
+    reach, margin = abs(means[0] - means[1]) + SPREAD * error, CLOSE * max(means)
+    if reach >= margin:
+        return None
+    return (f"alike: the means {means[0]:.3g} and {means[1]:.3g} differ by {abs(means[0] - means[1]):.3g}, with "
+            f"{SPREAD:g} standard errors at most {reach:.3g}, within {100 * CLOSE:.0f} % of the larger ({margin:.3g})")
 
 
 def _variances(a: list, b: list) -> list | None:
@@ -307,13 +328,17 @@ def _compare_binarity(rows) -> dict:
         a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
         values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
         untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], _gap(a, b), "AR-1 against AR-4 MP")
-        if untold:
+        alike = untold and _alike(by[v]["ar1"], by[v]["ar4_mp"])
+        if alike:  # alike within the noise: AR-1's not more binary
+            told[v], values[f"{v:g}"]["alike"] = False, alike
+        elif untold:
             close.append(untold)
         else:
             told[v] = a > b
     rule = ("binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run; means of "
             f"the replicas apart by more than {SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without "
-            "replicas: too noisy); one velocity where AR-1's is told lower decides")
+            f"replicas: too noisy); one velocity where AR-1's is told lower, or alike (within {100 * CLOSE:.0f} % "
+            f"with {SPREAD:g} standard errors), decides")
     return _at_every_velocity(claim, told, close, values, rule)
 
 
@@ -398,7 +423,7 @@ def _compare(rows, faster, slower, velocities, claim):
             faster_at[v], gap = order
             untold = _untold(v, entropy[faster], entropy[slower], gap,
                              f"neither mixed: {faster} against {slower}, mixing entropy at their end, {ends[faster][0]:g} s")
-            if untold:
+            if untold:  # never alike (``_alike``): near its ceiling 10 % of the entropy spans nearly to fully mixed
                 why.append(untold)
                 del faster_at[v]
             continue
@@ -408,12 +433,18 @@ def _compare(rows, faster, slower, velocities, claim):
                        f"{low:.3g} s, against {other:.3g} s (run it longer: [[durations]])")
             continue
         untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]")
-        if untold:
+        # alike within the noise: not faster (told only of t95s known, not of a bound)
+        alike = untold and mean_a is not None and mean_b is not None and _alike(counted[faster][v], counted[slower][v])
+        if alike:
+            faster_at[v], values[f"{v:g}"]["alike"] = False, alike
+        elif untold:
             why.append(untold)
             del faster_at[v]
     rule = ("mean t95 of the replicas, a run not mixed by its end counted at its end (a lower bound), apart by "
-            f"more than {SPREAD:g} standard errors; differences within {100 * CLOSE:.0f} % need replicas; where "
-            "neither mixed by the same end, the higher mean mixing entropy there mixes faster (Figs. 3, 9 a)")
+            f"more than {SPREAD:g} standard errors; differences within {100 * CLOSE:.0f} % need replicas; alike (the "
+            f"difference with {SPREAD:g} standard errors within {100 * CLOSE:.0f} % of the larger mean t95) is not "
+            "faster; where neither mixed by the same end, the higher mean mixing entropy there mixes faster (Figs. 3, "
+            "9 a)")
     return _at_every_velocity(claim, faster_at, why, values, rule)
 
 
@@ -533,7 +564,9 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
     changed sign and grew is not one that shrank). Up to 2 Umf a run not mixed by its end bounds the difference
     (``slow`` unmixed: ``slow - fast > L``; ``fast`` unmixed: ``< U``): a bound away from 0 bounds its size, and
     decides there where it exceeds the size at the top; else that velocity is unknown (``_at_every_velocity``:
-    one velocity told against decides, an unknown one leaves it open). ``planned``: every run of the study,
+    one velocity told against decides, an unknown one leaves it open). Sizes within their noise that are alike
+    (their difference with it within ``CLOSE`` of the larger t95, where replicas give both a spread, as in
+    ``_alike``) decide against it there: it did not shrink. ``planned``: every run of the study,
     those not started too; while the highest velocity it runs both families at has no result for both, the
     finding waits for it (the paper's claim is at its highest velocity, 2.9 Umf)."""
     a, b = _mean_t95(rows, slow), _mean_t95(rows, fast)
@@ -559,8 +592,16 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
         bound = difference if a[v][1] else -difference if b[v][1] else None  # a lower bound of the size, if > 0
         gaps[f"{v:g}"] = f"> {difference:.3g}" if a[v][1] else f"< {difference:.3g}" if b[v][1] else difference
         noise = SPREAD * math.hypot(error[top], error[v])  # of the two sizes' difference
+        # alike (``_alike``): the sizes' difference with its noise within CLOSE of the larger t95, spreads known
+        margin = CLOSE * max(a[v][0], b[v][0], a[top][0], b[top][0])
+        spreads = all(_replica_error(counted[slow][x], counted[fast][x]) is not None for x in (top, v))
         if bound is None and abs(abs(difference) - gap) > noise:
             told[v] = gap < abs(difference)
+        elif bound is None and spreads and abs(abs(difference) - gap) + noise < margin:
+            told[v] = False  # not smaller by what a single run's chaos leaves untold: it did not shrink
+            gaps[f"{v:g}"] = (f"{difference:.3g}, alike in size: {abs(difference):.3g} s against {gap:.3g} s at "
+                              f"{top:g} Umf, with {SPREAD:g} standard errors ({noise:.3g} s) within "
+                              f"{100 * CLOSE:.0f} % of the larger t95 ({margin:.3g} s)")
         elif bound is None:
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
                           f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; more "
@@ -574,8 +615,9 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
     values = {f"difference at {top:g} Umf": a[top][0] - b[top][0], "differences up to 2 Umf": gaps}
     rule = (f"t95 of {slow} minus {fast}: smaller in size at {top:g} Umf than at every velocity up to 2 Umf, by "
             f"more than {SPREAD:g} standard errors of the two differences (from the replicas' spread; without "
-            f"replicas, {100 * CLOSE:.0f} % of the larger t95 for {SPREAD:g} errors); where a run there did not "
-            "mix, its bound decides only where it exceeds that size so")
+            f"replicas, {100 * CLOSE:.0f} % of the larger t95 for {SPREAD:g} errors); sizes alike (their difference "
+            f"with {SPREAD:g} errors within {100 * CLOSE:.0f} % of the larger t95, spreads known) did not shrink; "
+            "where a run there did not mix, its bound decides only where it exceeds that size so")
     return _at_every_velocity(claim, told, untold, values, rule)
 
 
@@ -605,15 +647,19 @@ def _expansion(rows) -> dict:
         ma, mb = sum(a[v]) / len(a[v]), sum(b[v]) / len(b[v])
         values[f"{v:g}"] = {"ar4_mp": a[v], "ar1": b[v]}
         untold = _untold(v, a[v], b[v], _gap(ma, mb), "AR-4 MP against AR-1")
-        if untold:
+        alike = untold and _alike(a[v], b[v])
+        if alike:  # alike within the noise: AR-4's does not expand more
+            told[v], values[f"{v:g}"]["alike"] = False, alike
+        elif untold:
             why.append(untold)
         else:
             told[v] = ma > mb
     rule = (f"mean bed expansion (bed_top from {WINDOW_START:g} s after the inlet ramp for {WINDOW:g} s, over "
             f"its settled value) of AR-4 MP above AR-1's at every velocity both ran, the means apart by more than "
             f"{SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without replicas: too noisy); one velocity "
-            "where AR-4 MP's is told lower decides; a bed whose top stood at the outlet for half the window or more "
-            "is left out (its height is the outlet's)")
+            f"where AR-4 MP's is told lower, or alike (within {100 * CLOSE:.0f} % with {SPREAD:g} standard errors), "
+            "decides; a bed whose top stood at the outlet for half the window or more is left out (its height is the "
+            "outlet's)")
     return _at_every_velocity(claim, told, why, values, rule)
 
 
