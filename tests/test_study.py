@@ -434,6 +434,21 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
                                                                               simulated_seconds=13.0)])[0]
     assert unknown["verdict"] == "open" and "only known to exceed 15.5 s, against 16.9 s" in unknown["why"]
     assert "run it longer" in unknown["why"]
+    # the campaign's lift and torque at 1.6 Umf: AR-4 MP not mixed by 20 s in either replica (a mean above 20)
+    # against drag only at 19.44 and 17.0 s (18.2, standard error of the difference 1.73, taking drag only's
+    # variance for both): within their spread, yet drag only's mean lies at most 18.22 - 20 + 3.45 = 1.67 s above
+    # MP's bound, within 10 % of 20 s: MP is not the faster by 10 %, so lift and torque do not shorten mixing there;
+    # drag only at 19.44 and 15.0 s (up to 3.5 s above) leaves it open
+    mp = [unmixed("ar4_mp", 1.6, 20.0, 0.946), unmixed("ar4_mp", 1.6, 20.0, 0.852)]
+    claim = "lift and torque shorten AR-4 mixing"
+    drag = [dict(row("ar4_mp_drag", 1.6, t), simulated_seconds=20.0) for t in (19.44, 17.0)]
+    lift = next(f for f in check_findings(mp + drag) if f["finding"] == claim)
+    assert lift["verdict"] == "does not hold"
+    assert lift["values"]["1.6"]["alike"] == ("not below: the mean 20, a lower bound (runs not mixed by their end), "
+                                              "against 18.2, which with 2 standard errors lies at most 1.67 above it, "
+                                              "within 10 % of the larger (2)")
+    drag[1]["t95"] = 15.0
+    assert next(f for f in check_findings(mp + drag) if f["finding"] == claim)["verdict"] == "open"
     # SP against MP "only a slight effect": mean t95s within 20 % of MP's; an unmixed family's mean a lower
     # bound, which decides once the gap it leaves reaches 20 % (SP mixed at 4.26 s, MP not by 20 s: > 0.79)
     claim = "single- against multi-particle closures: only a slight effect on AR-4 mixing"
@@ -448,8 +463,8 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert short["verdict"] == "open" and "at 2 Umf" in short["why"]
     # replicas within their spread yet alike: the difference of the means with twice its standard error within
     # 10 % of the larger mean decides against a claimed order (AR-4 MP 4.3 s against AR-1 4.35: 0.05 s faster on
-    # the means, within 2 standard errors, 0.224 s; 0.274 s at most, within 0.435 s: not faster). Wider spreads,
-    # a single run each, or a bound (an unmixed run counted at its end) tell no likeness: open
+    # the means, within 2 standard errors, 0.224 s; 0.274 s at most, within 0.435 s: not faster). Wider spreads
+    # or a single run each tell no likeness: open
     alike = check_findings([row("ar1", 2.0, 4.3), row("ar1", 2.0, 4.4), row("ar4_mp", 2.0, 4.2),
                             row("ar4_mp", 2.0, 4.4)])[0]
     assert alike["verdict"] == "does not hold"
@@ -458,11 +473,20 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     wide = check_findings([row("ar1", 2.0, 4.0), row("ar1", 2.0, 4.7), row("ar4_mp", 2.0, 4.0),
                            row("ar4_mp", 2.0, 4.6)])[0]
     assert wide["verdict"] == "open" and "replicas' spread" in wide["why"]
+    # a bound (a run not mixed by its end, counted there) bounds one side: AR-4 MP's mean above 4.375 against
+    # AR-1's 4.35 (standard error of the difference 0.056) lies at most 0.087 s above it: not faster by 10 %;
+    # AR-1's mean above 4.375 against AR-4 MP's 4.35 leaves AR-4 MP faster by any amount: open
     bounded = check_findings([dict(row("ar1", 2.0, 4.3), simulated_seconds=8.0),
                               dict(row("ar1", 2.0, 4.4), simulated_seconds=8.0),
                               unmixed("ar4_mp", 2.0, 4.35, 0.9),
                               dict(row("ar4_mp", 2.0, 4.4), simulated_seconds=8.0)])[0]
-    assert bounded["verdict"] == "open" and "alike" not in bounded["values"]["2"]
+    assert bounded["verdict"] == "does not hold" and bounded["values"]["2"]["alike"].startswith(
+        "not below: the mean 4.38, a lower bound (runs not mixed by their end), against 4.35, which with 2 standard "
+        "errors lies at most 0.0868 above it")
+    other = check_findings([unmixed("ar1", 2.0, 4.35, 0.9), dict(row("ar1", 2.0, 4.4), simulated_seconds=8.0),
+                            dict(row("ar4_mp", 2.0, 4.3), simulated_seconds=8.0),
+                            dict(row("ar4_mp", 2.0, 4.4), simulated_seconds=8.0)])[0]
+    assert other["verdict"] == "open" and "alike" not in other["values"]["2"]
     # one velocity where it is not faster decides, whatever another leaves open
     mixed_up = check_findings([row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 4.0), row("ar1", 1.7, 3.0),
                                row("ar4_mp", 1.7, 2.9)])[0]

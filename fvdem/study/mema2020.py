@@ -243,20 +243,30 @@ def _within_spread(a: list, b: list) -> str | None:
     return f"{told}, within {SPREAD:g} standard errors ({SPREAD * error:.3g})"
 
 
-def _alike(a: list, b: list) -> str | None:
+def _alike(a: list, b: list, bounded: bool = False) -> str | None:
     """Whether two families' replica values at one velocity, whose order lies within their spread
     (``_within_spread``), are alike: the difference of the means with ``SPREAD`` standard errors either side
     (``_replica_error``) within ``CLOSE`` of the larger mean, the difference a single run's chaos leaves
     untold (an equivalence test, two one-sided at about 98 % each). A claimed order then does not hold there:
     a difference of ``CLOSE`` or more is ruled out. Without a spread known, None: one run each tells nothing of
-    likeness. The values must be t95s that are known (no run counted at its end: a lower bound bounds one side
-    only). More replicas shrink the error, so two values that are alike are told alike in the end, as an order
-    that exists is told: with enough replicas every comparison decides. Returns the numbers as text, or None."""
+    likeness. More replicas shrink the error, so two values that are alike are told alike in the end, as an order
+    that exists is told: with enough replicas every comparison decides. ``bounded``: ``a`` holds runs counted at
+    their end (not mixed by then), its mean a lower bound at or above ``b``'s: its true mean may lie anywhere above,
+    so only one side is told, that ``b``'s mean lies at most ``CLOSE`` above it (``a`` is not the lower by as much;
+    for the claim that ``a`` mixes sooner, no better than alike). Returns the numbers as text, or None."""
     error = _replica_error(a, b)
     if error is None:
         return None
     means = [sum(v) / len(v) for v in (a, b)]
-    reach, margin = abs(means[0] - means[1]) + SPREAD * error, CLOSE * max(means)
+    margin = CLOSE * max(means)
+    if bounded:
+        reach = means[1] - means[0] + SPREAD * error
+        if reach >= margin:
+            return None
+        return (f"not below: the mean {means[0]:.3g}, a lower bound (runs not mixed by their end), against "
+                f"{means[1]:.3g}, which with {SPREAD:g} standard errors lies at most {reach:.3g} above it, within "
+                f"{100 * CLOSE:.0f} % of the larger ({margin:.3g})")
+    reach = abs(means[0] - means[1]) + SPREAD * error
     if reach >= margin:
         return None
     return (f"alike: the means {means[0]:.3g} and {means[1]:.3g} differ by {abs(means[0] - means[1]):.3g}, with "
@@ -433,8 +443,9 @@ def _compare(rows, faster, slower, velocities, claim):
                        f"{low:.3g} s, against {other:.3g} s (run it longer: [[durations]])")
             continue
         untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]")
-        # alike within the noise: not faster (told only of t95s known, not of a bound)
-        alike = untold and mean_a is not None and mean_b is not None and _alike(counted[faster][v], counted[slower][v])
+        # alike within the noise: not faster; where only ``faster``'s mean is a bound (at or above the other's, as
+        # here), not below by 10 % is told as well; ``slower``'s bound would bound the wrong side
+        alike = untold and mean_b is not None and _alike(counted[faster][v], counted[slower][v], mean_a is None)
         if alike:
             faster_at[v], values[f"{v:g}"]["alike"] = False, alike
         elif untold:
