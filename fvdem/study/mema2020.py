@@ -252,8 +252,8 @@ def _alike(a: list, b: list, bounded: bool = False) -> str | None:
     likeness. More replicas shrink the error, so two values that are alike are told alike in the end, as an order
     that exists is told: with enough replicas every comparison decides. ``bounded``: ``a`` holds runs counted at
     their end (not mixed by then), its mean a lower bound at or above ``b``'s: its true mean may lie anywhere above,
-    so only one side is told, that ``b``'s mean lies at most ``CLOSE`` above it (``a`` is not the lower by as much;
-    for the claim that ``a`` mixes sooner, no better than alike). Returns the numbers as text, or None."""
+    so only one side is told, that ``b``'s mean lies at most ``CLOSE`` above it (``a`` does not lie below ``b`` by as
+    much: against a claim that ``a`` is the lower, as decisive as alike). Returns the numbers as text, or None."""
     error = _replica_error(a, b)
     if error is None:
         return None
