@@ -640,6 +640,16 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert kept["values"]["differences up to 2 Umf"]["2"] == (
         "-0.6, alike in size: 0.6 s against 0.5 s at 2.9 Umf, with 2 standard errors (0.2 s) within 10 % of the "
         "larger t95 (0.485 s)")
+    # within the noise with replicas: AR-1 minus AR-4 MP 0.55 s at 2.0 against 0.45 s at 2.9, the per-run
+    # variances summing to 0.165 s^2: likeness (0.1 s + 2 errors within 10 % of 4.955 s) needs an error of a
+    # size's difference below 0.198 s, sqrt(0.165 / n): about 5 replicas of each
+    spread = campaign[:1] + campaign[4:6] + [
+        row("ar1", 2.0, 4.21), row("ar1", 2.0, 4.6), row("ar1", 2.9, 3.14), row("ar1", 2.9, 3.3),
+        row("ar4_mp", 2.0, 4.81), row("ar4_mp", 2.0, 5.1), row("ar4_mp", 2.9, 2.64), row("ar4_mp", 2.9, 2.9)]
+    plan = found(spread)["the AR-1/AR-4 difference shrinks at the highest velocity"]
+    assert plan["verdict"] == "open" and "2 Umf: ar1 minus ar4_mp 0.55 s in size against 0.45 s at 2.9 Umf, within " \
+        "2 standard errors of their difference (0.574 s; about 5 replicas of each would tell, if the means and " \
+        "spread stay: [[points]])" in plan["why"]
     # a bound that does not reach the size at the top by its noise tells nothing there: open (AR-1 at 19.5 against
     # AR-4 MP unmixed at 20: a size above 0.5 only, against 0.36 at 2.9)
     near = [row("ar1", 1.6, 19.5, end=20.0)] + replicated[1:]
@@ -697,6 +707,9 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert spread["verdict"] == "open"
     assert "(AR-4 MP against AR-1: means 2.1 (1.63, 2.57) against 1.74 (1.73, 1.75), within 2 standard errors " \
         "(0.94)" in spread["why"]
+    # how many replicas would tell, if the means and the spread stay: the standard error sqrt((0.4418 + 0.0002) /
+    # n) below 0.36 / 2 (the order; likeness would need 0.21 - 0.36 < 0): n = 0.442 / 0.18^2 = 13.6, so 14
+    assert "about 14 replicas of each would tell, if the means and spread stay: [[points]]" in spread["why"]
     # alike: 1.75 (1.72, 1.78) against 1.74 (1.73, 1.75), within 10 % with twice the error: not more
     even = erupted[:2] + [row("ar4_mp", 1.6, None, height=h) for h in (1.72, 1.78)]
     alike = found(even)["AR-4 beds expand more than AR-1 at the same U/Umf"]

@@ -297,13 +297,34 @@ def _difference_error(a: list, b: list) -> float:
     return CLOSE * max(sum(a) / len(a), sum(b) / len(b)) / SPREAD if error is None else error
 
 
-def _untold(v, a: list, b: list, gap: float, pair: str) -> str | None:
+def _replicas_to_tell(variance: float, difference: float, margin: float | None) -> int | None:
+    """How many replicas of each family would tell a difference (of two means, or of two differences' sizes)
+    either way if the means and the spread stay as they are: its standard error ``sqrt(variance / n)``
+    (``variance``: the sum of the per-run variances of the values it is made of) below ``|difference| / SPREAD``
+    (an order told) or, with a ``margin`` (``_alike``: None where likeness is not told), below ``(margin -
+    |difference|) / SPREAD`` (alike), whichever needs fewer. An estimate for planning ``[[points]]``: the next
+    replicas move the means. None where the difference is 0 and no margin applies."""
+    need = max(abs(difference), (margin or 0.0) - abs(difference)) / SPREAD
+    return math.ceil(variance / need ** 2) if need > 0 else None
+
+
+def _to_tell(n: int | None, have: int) -> str:
+    """"about n replicas of each would tell ..." (``_replicas_to_tell``), or "more replicas would tell"."""
+    if n is None:
+        return "more replicas would tell: [[points]]"
+    return f"about {max(n, have + 1)} replicas of each would tell, if the means and spread stay: [[points]]"
+
+
+def _untold(v, a: list, b: list, gap: float, pair: str, alike: bool = True) -> str | None:
     """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
-    cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), or
-    within ``CLOSE`` without replicas; None where it can."""
+    cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), with how
+    many replicas would tell it or, where ``alike`` (the values' likeness is told: ``_alike``), their likeness
+    (``_replicas_to_tell``); or within ``CLOSE`` without replicas. None where it can."""
     spread = _within_spread(a, b)
     if spread:
-        return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; more replicas would tell: [[points]])"
+        var, means = _variances(a, b), [sum(x) / len(x) for x in (a, b)]
+        n = var and _replicas_to_tell(sum(var), means[0] - means[1], CLOSE * max(means) if alike else None)
+        return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; {_to_tell(n, max(len(a), len(b)))})"
     if gap < CLOSE and max(len(a), len(b)) < 2:
         return f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)"
     return None
@@ -431,8 +452,8 @@ def _compare(rows, faster, slower, velocities, claim):
                 why.append(f"neither mixed by its end at {v:g} Umf, and their ends differ (too short)")
                 continue
             faster_at[v], gap = order
-            untold = _untold(v, entropy[faster], entropy[slower], gap,
-                             f"neither mixed: {faster} against {slower}, mixing entropy at their end, {ends[faster][0]:g} s")
+            untold = _untold(v, entropy[faster], entropy[slower], gap, f"neither mixed: {faster} against {slower}, "
+                             f"mixing entropy at their end, {ends[faster][0]:g} s", alike=False)
             if untold:  # never alike (``_alike``): near its ceiling 10 % of the entropy spans nearly to fully mixed
                 why.append(untold)
                 del faster_at[v]
@@ -614,9 +635,12 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
                               f"{top:g} Umf, with {SPREAD:g} standard errors ({noise:.3g} s) within "
                               f"{100 * CLOSE:.0f} % of the larger t95 ({margin:.3g} s)")
         elif bound is None:
+            var = [_variances(counted[slow][x], counted[fast][x]) for x in (top, v)]
+            n = all(var) and _replicas_to_tell(sum(var[0]) + sum(var[1]), abs(difference) - gap, margin)
+            have = max(len(counted[f][x]) for f in (slow, fast) for x in (top, v))
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
-                          f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; more "
-                          "replicas would tell: [[points]])")
+                          f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; "
+                          f"{_to_tell(n or None, have)})")
         elif gap < bound - noise:
             told[v] = True
         else:
