@@ -1501,11 +1501,12 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
     # 22 points, two replicas each, but one of AR-4 SP at 2.6 and 2.9 Umf (their pinned rods cap the entropy) and
     # of AR-4 MP at 2.9 in the paper's 1.05 m column; AR-4 MP and SP at 2.9, SP at 2.6 and MP drag only at 2.9 in
-    # a 2.1 m column, two replicas each (MP drag only there alone)
-    assert len(study.runs) == 47 and {r.replica for r in study.runs} == {1, 2}
+    # a 2.1 m column, two replicas each (MP drag only there alone), and AR-1 at 2.6 and 2.9 there too
+    assert len(study.runs) == 51 and {r.replica for r in study.runs} == {1, 2}
     assert {r.name for r in study.runs if "tall" in r.name} == {
-        f"ar4_{point}_r{k}" for point in ("mp_tall_u_over_umf2.9", "mp_drag_tall_u_over_umf2.9",
-                                          "sp_tall_u_over_umf2.6", "sp_tall_u_over_umf2.9") for k in (1, 2)}
+        f"ar{point}_r{k}" for point in ("4_mp_tall_u_over_umf2.9", "4_mp_drag_tall_u_over_umf2.9",
+                                        "4_sp_tall_u_over_umf2.6", "4_sp_tall_u_over_umf2.9",
+                                        "1_tall_u_over_umf2.6", "1_tall_u_over_umf2.9") for k in (1, 2)}
     first = [_priority(r) for r in study.runs if r.replica == 1]
     second = [_priority(r) for r in study.runs if r.replica == 2]
     assert min(first) > max(second)
@@ -1704,7 +1705,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     queue = _Queue(study.runs, 2)
     ended, first = queue.take(0)
     assert ended == [] and [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s
-    assert queue.take(2) == ([], []) and len(queue) == 45
+    assert queue.take(2) == ([], []) and len(queue) == 49
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
@@ -1713,7 +1714,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 43
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 47
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
