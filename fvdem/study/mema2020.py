@@ -259,18 +259,15 @@ def _alike(a: list, b: list, bounded: bool = False) -> str | None:
         return None
     means = [sum(v) / len(v) for v in (a, b)]
     margin = CLOSE * max(means)
-    if bounded:
-        reach = means[1] - means[0] + SPREAD * error
-        if reach >= margin:
-            return None
-        return (f"not below: the mean {means[0]:.3g}, a lower bound (runs not mixed by their end), against "
-                f"{means[1]:.3g}, which with {SPREAD:g} standard errors lies at most {reach:.3g} above it, within "
-                f"{100 * CLOSE:.0f} % of the larger ({margin:.3g})")
-    reach = abs(means[0] - means[1]) + SPREAD * error
+    reach = (means[1] - means[0] if bounded else abs(means[0] - means[1])) + SPREAD * error
     if reach >= margin:
         return None
+    within = f"within {100 * CLOSE:.0f} % of the larger ({margin:.3g})"
+    if bounded:
+        return (f"not below: the mean {means[0]:.3g}, a lower bound (runs not mixed by their end), against "
+                f"{means[1]:.3g}, which with {SPREAD:g} standard errors lies at most {reach:.3g} above it, {within}")
     return (f"alike: the means {means[0]:.3g} and {means[1]:.3g} differ by {abs(means[0] - means[1]):.3g}, with "
-            f"{SPREAD:g} standard errors at most {reach:.3g}, within {100 * CLOSE:.0f} % of the larger ({margin:.3g})")
+            f"{SPREAD:g} standard errors at most {reach:.3g}, {within}")
 
 
 def _variances(a: list, b: list) -> list | None:
@@ -618,6 +615,7 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
     gap = abs(a[top][0] - b[top][0])
     counted = {f: _counted(rows, f) for f in (slow, fast)}
     error = {v: _difference_error(counted[slow][v], counted[fast][v]) for v in (top, *low)}
+    var = {v: _variances(counted[slow][v], counted[fast][v]) for v in (top, *low)}  # None: no spread known
     gaps, told, untold = {}, {}, []
     for v in low:
         difference = a[v][0] - b[v][0]  # exact, or a lower (slow unmixed) or upper (fast unmixed) bound
@@ -626,7 +624,7 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
         noise = SPREAD * math.hypot(error[top], error[v])  # of the two sizes' difference
         # alike (``_alike``): the sizes' difference with its noise within CLOSE of the larger t95, spreads known
         margin = CLOSE * max(a[v][0], b[v][0], a[top][0], b[top][0])
-        spreads = all(_replica_error(counted[slow][x], counted[fast][x]) is not None for x in (top, v))
+        spreads = var[top] is not None and var[v] is not None
         if bound is None and abs(abs(difference) - gap) > noise:
             told[v] = gap < abs(difference)
         elif bound is None and spreads and abs(abs(difference) - gap) + noise < margin:
@@ -635,12 +633,11 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
                               f"{top:g} Umf, with {SPREAD:g} standard errors ({noise:.3g} s) within "
                               f"{100 * CLOSE:.0f} % of the larger t95 ({margin:.3g} s)")
         elif bound is None:
-            var = [_variances(counted[slow][x], counted[fast][x]) for x in (top, v)]
-            n = all(var) and _replicas_to_tell(sum(var[0]) + sum(var[1]), abs(difference) - gap, margin)
+            n = _replicas_to_tell(sum(var[top]) + sum(var[v]), abs(difference) - gap, margin) if spreads else None
             have = max(len(counted[f][x]) for f in (slow, fast) for x in (top, v))
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
                           f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; "
-                          f"{_to_tell(n or None, have)})")
+                          f"{_to_tell(n, have)})")
         elif gap < bound - noise:
             told[v] = True
         else:
