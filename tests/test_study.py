@@ -1244,7 +1244,7 @@ def test_the_findings_page_shows_a_findings_note_beside_its_numbers():
     rows = [{"status": "finished", "simulated_seconds": 6.4}, {"status": "running", "simulated_seconds": 1.0}]
     page = findings_page("t", rows, [{"finding": "terminal t95", "verdict": "does not hold", "values": {"2.9": 4.3612},
                                       "rule": "within 25 %", "note": "bed at the outlet: ar4_mp at 2.9 Umf"}], [])
-    assert "1 of 2 runs at their end, 1 on the way, 0 not started; 1 findings: 1 does not hold." in page
+    assert "1 of 2 runs at their end, 1 on the way, 0 not started; 1 finding: 1 does not hold." in page
     assert "| terminal t95 | does not hold | 2.9: 4.36 (bed at the outlet: ar4_mp at 2.9 Umf) | within 25 % |" in page
     # an open finding with numbers says why beside them
     page = findings_page("t", rows, [{"finding": "expands more", "verdict": "open", "values": {"1.6": 1.63},
@@ -1276,6 +1276,9 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     page = (out / "findings.md").read_text()
     assert out / "findings.md" in written and page.startswith("# t: findings\n")
     assert f"2 of 2 runs at their end, 0 on the way, 0 not started; {len(findings)} findings: " in page
+    counts = {v: sum(f["verdict"] == v for f in findings) for v in ("holds", "does not hold", "open")}
+    said = {"holds": "hold", "does not hold": "do not hold", "open": "open"}  # verbs agree with their counts
+    assert all(f"{n} {v if n == 1 else said[v]}" in page.splitlines()[2] for v, n in counts.items() if n)
     rows = [line for line in page.splitlines() if line.startswith("| ") and not line.startswith("| finding")]
     assert [row.split(" | ")[:2] for row in rows] == [[f"| {f['finding']}", f["verdict"]] for f in findings]
     assert "![t95](t95.png)" in page and "![fig7_void_fraction](fig7_void_fraction.png)" in page

@@ -140,6 +140,7 @@ def report(out) -> list:
 
 FINDINGS_PAGE = "findings.md"  # the report's findings and figures as one page to read (``findings_page``)
 _VERDICT_ORDER = {"holds": 0, "does not hold": 1, "open": 2}
+_VERDICT_PLURAL = {"holds": "hold", "does not hold": "do not hold"}  # "2 hold", "2 do not hold"; "open" stays
 
 
 def findings_page(study, rows: list, findings: list, figures: list) -> str:
@@ -152,8 +153,9 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
         verdicts[f["verdict"]] = verdicts.get(f["verdict"], 0) + 1
     lines = [f"# {study or 'study'}: findings", "",
              f"{ended} of {len(rows)} runs at their end, {started} on the way, {len(rows) - ended - started} not "
-             f"started; {len(findings)} findings: " + ", ".join(
-                 f"{n} {v}" for v, n in sorted(verdicts.items(), key=lambda kv: _VERDICT_ORDER.get(kv[0], 3))) + ".",
+             f"started; {len(findings)} finding{'' if len(findings) == 1 else 's'}: " + ", ".join(
+                 f"{n} {v if n == 1 else _VERDICT_PLURAL.get(v, v)}"
+                 for v, n in sorted(verdicts.items(), key=lambda kv: _VERDICT_ORDER.get(kv[0], 3))) + ".",
              "", "| finding | verdict | numbers | rule |", "|---|---|---|---|"]
     for f in findings:
         numbers = "; ".join(part for part in (describe_values(f["values"]) if f.get("values") is not None else "",
