@@ -709,13 +709,23 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
         "(0.94)" in spread["why"]
     # how many replicas would tell, if the means and the spread stay: the standard error sqrt((0.4418 + 0.0002) /
     # n) below 0.36 / 2 (the order; likeness would need 0.21 - 0.36 < 0): n = 0.442 / 0.18^2 = 13.6, so 14
-    assert "about 14 replicas of each would tell, if the means and spread stay: [[points]]" in spread["why"]
+    assert "about 14 replicas of each would tell, if the means and spread stay: [[points]] of ar4_mp_expansion and " \
+        "ar1_expansion" in spread["why"]
     # alike: 1.75 (1.72, 1.78) against 1.74 (1.73, 1.75), within 10 % with twice the error: not more
     even = erupted[:2] + [row("ar4_mp", 1.6, None, height=h) for h in (1.72, 1.78)]
     alike = found(even)["AR-4 beds expand more than AR-1 at the same U/Umf"]
     assert alike["verdict"] == "does not hold" and alike["values"]["1.6"]["alike"].startswith("alike: the means 1.75")
     more = erupted + [row("ar4_mp", 1.6, None, height=h) for h in (2.3, 2.4, 2.2, 2.35)]
     assert found(more)["AR-4 beds expand more than AR-1 at the same U/Umf"]["verdict"] == "holds"
+    # the same four as runs of "ar4_mp_expansion" (ar4_mp's case cut short after the window, 5 s, from beds of
+    # their own) count as AR-4 MP's for the expansion alone: the same verdict and values, and not one of the t95
+    # findings sees them (unmixed at 5 s, they would bound AR-4 MP's t95 at 1.6 by 5 s)
+    short = erupted + [row("ar4_mp_expansion", 1.6, None, end=5.0, height=h) for h in (2.3, 2.4, 2.2, 2.35)]
+    pooled, alone = found(short), found(erupted)
+    assert pooled["AR-4 beds expand more than AR-1 at the same U/Umf"] == \
+        found(more)["AR-4 beds expand more than AR-1 at the same U/Umf"]
+    assert {k: f for k, f in pooled.items() if not k.startswith("AR-4 beds")} == \
+        {k: f for k, f in alone.items() if not k.startswith("AR-4 beds")}
     # one velocity told against the claim decides, whatever another leaves within the noise
     lower = erupted + [row("ar1", 2.0, 3.0, height=2.5), row("ar4_mp", 2.0, 3.0, height=2.0)]
     assert found(lower)["AR-4 beds expand more than AR-1 at the same U/Umf"]["verdict"] == "does not hold"
@@ -1505,7 +1515,13 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     # 22 points, two replicas each, but one of AR-4 SP at 2.6 and 2.9 Umf (their pinned rods cap the entropy) and
     # of AR-4 MP at 2.9 in the paper's 1.05 m column; AR-4 MP and SP at 2.9, SP at 2.6 and MP drag only at 2.9 in
     # a 2.1 m column, two replicas each (MP drag only there alone), and AR-1 at 2.6 and 2.9 there too
-    assert len(study.runs) == 51 and {r.replica for r in study.runs} == {1, 2}
+    # and, for the bed expansion at 1.6 and 1.7 Umf alone, AR-1 and AR-4 MP cut short after its window (5 s) from
+    # beds of their own: two replicas of AR-1, four of AR-4 MP (the campaign's spreads: 0.01-0.09 and 0.45-0.66)
+    assert len(study.runs) == 63 and {r.replica for r in study.runs} == {1, 2, 3, 4}
+    short = {r.name: (r.duration, r.bed) for r in study.runs if "expansion" in r.name}
+    assert short == {f"ar{f}_expansion_u_over_umf{v}_r{k}": (5.0, f"ar{f[0]}_expansion" + (f"_r{k}" if k > 1 else ""))
+                     for f, n in (("1", 2), ("4_mp", 4)) for v in (1.6, 1.7) for k in range(1, n + 1)}
+    assert all(r.replica <= 2 for r in study.runs if "expansion" not in r.name)
     assert {r.name for r in study.runs if "tall" in r.name} == {
         f"ar{point}_r{k}" for point in ("4_mp_tall_u_over_umf2.9", "4_mp_drag_tall_u_over_umf2.9",
                                         "4_sp_tall_u_over_umf2.6", "4_sp_tall_u_over_umf2.9",
@@ -1515,7 +1531,11 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     assert min(first) > max(second)
     assert max(first) == 20.0 / 5e-5  # then longest first within a replica (the [[durations]] points: 20 s)
     beds = {b.name: _bed_priority(b) for b in study.beds}
-    assert set(beds) == {"ar1", "ar4", "ar1_r2", "ar4_r2"}
+    assert set(beds) == {"ar1", "ar4", "ar1_r2", "ar4_r2", "ar1_expansion", "ar4_expansion", "ar1_expansion_r2",
+                         "ar4_expansion_r2", "ar4_expansion_r3", "ar4_expansion_r4"}
+    # insertion seeds from 101: no expansion run starts from a bed a full run starts from
+    seeds = {b.name: b.overrides.get("particles.insertion.seed") for b in study.beds}
+    assert {seeds[b] for b in seeds if "expansion" in b} == {101, 102, 103, 104} and seeds["ar4_expansion_r4"] == 104
     assert min(beds["ar1"], beds["ar4"]) > max(first)
     assert min(first) > beds["ar1_r2"] == beds["ar4_r2"] > max(second)
 
@@ -1708,7 +1728,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     queue = _Queue(study.runs, 2)
     ended, first = queue.take(0)
     assert ended == [] and [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s
-    assert queue.take(2) == ([], []) and len(queue) == 49
+    assert queue.take(2) == ([], []) and len(queue) == 61
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
@@ -1717,7 +1737,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 47
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 59
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
