@@ -952,6 +952,12 @@ def test_the_index_lists_every_run_and_a_partial_invocation_keeps_the_others_res
     # --only keeps the planned runs it leaves out, started or not
     (out / "runs" / second).rmdir()
     assert [r["name"] for r in write_index(out, select_runs(study, [first]))["runs"]] == [first, second]
+    # and lists, pending, those it leaves out that the index never had (runs new in the study file, started with
+    # --only: the campaign's expansion families, 2026-12-05, whose index read 55 runs of the file's 63)
+    (out / "study.json").unlink()
+    index = write_index(out, select_runs(study, [first]), [{"name": first, "status": "finished", "t95": 1.0}])
+    assert [(r["name"], r["status"]) for r in index["runs"]] == [(first, "finished"), (second, "pending")]
+    assert index["runs"][1]["duration"] == study.runs[1].duration and index["runs"][1]["replica"] == 1
 
 
 def test_runs_with_more_dem_steps_left_start_first(tmp_path):

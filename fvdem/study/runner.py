@@ -390,7 +390,8 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     record, else ``pending`` with the simulated seconds its folder holds), so that ``--report`` works
     while a study runs; of the runs on record that ``study`` does not list, those ``--only`` left out
     (``study.planned``) and those whose folder exists stay, a run taken out of the study file before it
-    started goes. Returns the index written."""
+    started goes; a run ``--only`` left out that the index has never listed (one new in the study file) joins
+    it pending, so that ``--status`` counts what the study file plans. Returns the index written."""
     out = Path(out)
     path = out / "study.json"
     record = {}
@@ -408,7 +409,9 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     # point taken out of the file) leaves it
     runs = ([{**(latest.get(r.name) or _pending(r)), "replica": r.replica, "duration": r.duration, "physics": r.physics}
              for r in study.runs]
-            + [r for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))])
+            + [r for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))]
+            + [{**_pending(r), "replica": r.replica, "duration": r.duration, "physics": r.physics}
+               for r in study.left_out if r.name not in latest and r.name not in names])
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
              "report": study.report,
              **({"scheduler": description} if description else {}), "runs": runs}
