@@ -665,8 +665,12 @@ def _expansion_runs(rows) -> list:
     ramp): more replicas of the one finding that needs many (AR-4 MP's beds at 1.6-1.7 Umf expand 1.6-2.6 times
     by chance of a spout, AR-1's 1.7-1.9) at a quarter of a 20 s run's cost. They count for the expansion
     alone: a run cut short says nothing of t95, and its void fractions are of other times than a whole run's."""
-    return [{**r, "family": r["family"][:-len(EXPANSION)], "column": r["family"]}
-            if r["family"].endswith(EXPANSION) else r for r in rows]
+    return [_counted_as_base(r, EXPANSION) if r["family"].endswith(EXPANSION) else r for r in rows]
+
+
+def _counted_as_base(row: dict, suffix: str) -> dict:
+    """A run of family "<name><suffix>" (``TALL``, ``EXPANSION``) as <name>'s, its own family kept as ``column``."""
+    return {**row, "family": row["family"][:-len(suffix)], "column": row["family"]}
 
 
 def _expansion(rows) -> dict:
@@ -761,7 +765,7 @@ def _tall_columns(rows, at=lambda r: r.get("gas.u_over_umf")) -> tuple[list, dic
     kept, aside = [], {}
     for r in rows:
         if r["family"].endswith(TALL):
-            kept.append({**r, "family": r["family"][:-len(TALL)], "column": r["family"]})
+            kept.append(_counted_as_base(r, TALL))
         elif (r["family"], at(r)) in tall:
             aside.setdefault((r["family"], at(r)), []).append(r)
         else:

@@ -389,7 +389,7 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     """``study.json``: every run of ``study`` with its latest result (``results``, else the one on
     record, else ``pending`` with the simulated seconds its folder holds), so that ``--report`` works
     while a study runs; of the runs on record that ``study`` does not list, those ``--only`` left out
-    (``study.planned``) and those whose folder exists stay, a run taken out of the study file before it
+    (``study.left_out``) and those whose folder exists stay, a run taken out of the study file before it
     started goes; a run ``--only`` left out that the index has never listed (one new in the study file) joins
     it pending, so that ``--status`` counts what the study file plans. Returns the index written."""
     out = Path(out)
@@ -403,15 +403,17 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     latest = {r["name"]: r for r in record.get("runs", [])}
     latest.update({r["name"]: r for r in results})
     names = [r.name for r in study.runs]
-    planned = set(study.planned or names)
+    planned = set(names) | {r.name for r in study.left_out}
+
+    def listed(run, result=None):  # the run's latest result (else pending) with what the study file says of it
+        return {**(result or _pending(run)), "replica": run.replica, "duration": run.duration, "physics": run.physics}
+
     # the index keeps the runs ``--only`` left out, and a run the study file no longer plans while its folder
     # holds something (nothing on disk goes unlisted); one it no longer plans that never started (a replica or
     # point taken out of the file) leaves it
-    runs = ([{**(latest.get(r.name) or _pending(r)), "replica": r.replica, "duration": r.duration, "physics": r.physics}
-             for r in study.runs]
+    runs = ([listed(r, latest.get(r.name)) for r in study.runs]
             + [r for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))]
-            + [{**_pending(r), "replica": r.replica, "duration": r.duration, "physics": r.physics}
-               for r in study.left_out if r.name not in latest and r.name not in names])
+            + [listed(r) for r in study.left_out if r.name not in latest])
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
              "report": study.report,
              **({"scheduler": description} if description else {}), "runs": runs}

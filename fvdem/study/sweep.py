@@ -57,7 +57,6 @@ class Study:
     runs: tuple
     cluster: dict
     report: str = DEFAULT_REPORT  # a registered report (``fvdem.study.reports``): the study's table, figures, findings
-    planned: tuple = ()  # the names of every run the study file plans, where ``runs`` is a selection (``--only``)
     left_out: tuple = ()  # the runs (``RunSpec``) a selection (``--only``) left out: the index lists them too
 
 
@@ -345,5 +344,4 @@ def select_runs(study: Study, only) -> Study:
     runs = tuple(r for r in study.runs if r.name in set(only))
     beds = tuple(b for b in study.beds if b.name in {r.bed for r in runs})
     left_out = study.left_out + tuple(r for r in study.runs if r.name not in set(only))
-    return replace(study, runs=runs, beds=beds, planned=study.planned or tuple(r.name for r in study.runs),
-                   left_out=left_out)
+    return replace(study, runs=runs, beds=beds, left_out=left_out)
