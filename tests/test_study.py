@@ -283,6 +283,29 @@ def test_the_share_of_the_particles_pinned_at_the_outlet_at_the_end(tmp_path):
     assert _roof_share(tmp_path / "none", series, 1.05) is None and _roof_share(tmp_path, series, None) is None
 
 
+def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():
+    """``_centre_quantile``: the height under a share of the centres, spread evenly within their layer (uniform
+    counts: the share of the filled height); ``_dense_bed_expansion``: its mean over the window at the snapshots
+    over its first, unmoved by the few particles thrown far above the bed that set the 99 % top."""
+    import numpy as np
+    from fvdem.study.mema2020 import _centre_quantile, _dense_bed_expansion
+    assert _centre_quantile([100] * 10, 0.0, 0.03) == pytest.approx(0.9 * 0.3)  # uniform over 0-0.3 m
+    assert _centre_quantile([100] * 10, 0.1, 0.03, share=0.5) == pytest.approx(0.1 + 0.15)
+    assert _centre_quantile([0, 50, 50], 0.0, 0.1, share=0.5) == pytest.approx(0.2)  # the first layer holds none
+    assert _centre_quantile([0, 0], 0.0, 0.03) is None
+    settled = [100] * 10  # 0.27 m under 90 %
+    expanded = [50] * 20  # 0.54 m
+    spout = [50] * 20 + [0] * 10 + [1] * 5  # five centres thrown 0.3 m above it: 90 % of 1,005 lies at 0.543 m
+    times = [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5]
+    record = {"z_lower": 0.0, "layer_height": 0.03, "times": times, "count": [settled] * 3 + [expanded] * 9}
+    assert _dense_bed_expansion(record, ramp=1.0) == pytest.approx(2.0)  # window 2-5 s: all expanded
+    thrown = {**record, "count": [settled] * 3 + [expanded, spout] * 4 + [expanded]}
+    mean = np.mean([0.9 * 1005 / 50 * 0.03, 0.54] * 3 + [0.9 * 1005 / 50 * 0.03])  # the seven from 2.0 to 5.0 s
+    assert _dense_bed_expansion(thrown, ramp=1.0) == pytest.approx(mean / 0.27)
+    assert _dense_bed_expansion(thrown, ramp=1.0) < 2.02  # the spout moves it by under 1 %
+    assert _dense_bed_expansion(None) is None and _dense_bed_expansion({**record, "count": []}) is None
+
+
 def test_a_findings_numbers_read_as_one_line():
     from fvdem.study.reports import describe_values
     assert describe_values({"1.6": {"ar4_mp": "> 20 (not mixed)", "ar1": 16.901617}, "2": {"ar1": [1.7301, 2.0]}}) \
@@ -737,6 +760,20 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert "2.9 Umf: ar4_mp's bed top stood at the outlet (particles pinned at the roof)" in roofed["why"]
     more_at[-1]["bed_at_roof"] = 0.2  # at the outlet only now and then: its height counts
     assert found(more_at)["AR-4 beds expand more than AR-1 at the same U/Umf"]["verdict"] == "holds"
+    assert "note" not in roofed  # no run has the dense bed's height
+    # the dense bed's expansion (90 % of the centres) goes beside the verdict as a note, not into it: AR-4 MP's
+    # spouting beds at 1.6 (the campaign's: tops 1.63 and 2.57, dense beds 1.2 and 1.42 against AR-1's 1.5 and
+    # 1.66), the roofed run's left out as in the rule, a velocity where one family lacks it left out
+    dense = [dict(r, dense_bed_expansion=d) for r, d in zip(erupted, (1.5, 1.66, 1.2, 1.42))]
+    dense += [dict(row("ar1", 2.9, 3.1, height=3.09), dense_bed_expansion=2.4),
+              dict(row("ar4_mp", 2.9, 4.4, height=5.04), bed_at_roof=1.0, dense_bed_expansion=4.9),
+              dict(row("ar1", 2.0, 3.0, height=2.1), dense_bed_expansion=1.98), row("ar4_mp", 2.0, 3.0, height=2.7)]
+    beside = found(dense)["AR-4 beds expand more than AR-1 at the same U/Umf"]
+    assert beside["note"].endswith("1.6: AR-4 MP 1.31 (1.2, 1.42) against AR-1 1.58 (1.5, 1.66)")
+    assert beside["note"].startswith("the dense bed, the height under 90 % of the particle centres")
+    assert {k: v for k, v in beside.items() if k != "note"} == \
+        found([{k: v for k, v in r.items() if k != "dense_bed_expansion"} for r in dense])[
+            "AR-4 beds expand more than AR-1 at the same U/Umf"]
 
 
 def _square_or_fail(item, threads):
