@@ -217,7 +217,7 @@ def cmd_study(args) -> int:
         durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
         log(f"study {study.name}: {len(study.runs)} runs and {len(study.beds)} beds of {durations} s into {args.out}")
         result = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers,
-                           threads=args.threads_per_worker, log=log)
+                           threads=args.threads_per_worker, log=log, until=args.until)
         for path in report(args.out):
             log(f"report: {path}")
     failed = [r for r in result["runs"] if r["status"] == "failed"]
@@ -373,6 +373,17 @@ def thread_count(text: str) -> int:
     return value
 
 
+def deadline(text: str) -> float:
+    """``--until``'s epoch seconds (``fvdem.study.cluster.until_epoch``), or a usage error naming the forms."""
+    from .study.cluster import until_epoch
+    value = until_epoch(text)
+    if value is None:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: a time to come, as HH:MM or HH:MM:SS (local, its next occurrence), an ISO date and time "
+            "(2026-12-05T04:45) or +DURATION from now (+90m, +2h, +1:30:00)")
+    return value
+
+
 def positive_count(text: str) -> int:
     try:
         value = int(text)
@@ -458,6 +469,11 @@ def make_parser() -> argparse.ArgumentParser:
                             "sets (a changed setting) to --out's superseded/ and run them again; without it such "
                             "folders are refused before anything runs, each named with the keys that differ")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
+    study.add_argument("--until", type=deadline, metavar="TIME",
+                       help="stop at TIME (HH:MM, an ISO date and time, or +DURATION: +150m, +2h, +2:30:00): "
+                            "the running runs checkpoint and the same command continues; until then a free "
+                            "worker takes first the runs expected to end by TIME (their family's CPU seconds per "
+                            "simulated second so far, and where their point's ended replicas ended)")
     study.add_argument("--status", action="store_true",
                        help="where a study folder (or an archive of one) stands, read without writing: whether a "
                             "study runs there now, each run's state, simulated seconds, t95 and mixing entropy, "

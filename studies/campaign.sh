@@ -18,9 +18,10 @@
 # Extra arguments go to fvdem study: after a setting of the study file changed, run it once as
 # `studies/campaign.sh --supersede` (the runs of the old setting move to superseded/, nothing is deleted).
 # The last hour of a session: a machine handed back bare loses the runs in progress (twice so far: the
-# eighteenth and twenty-fifth sessions), so stop the study (--stop) and give that hour to runs that end within
-# it, e.g. `studies/campaign.sh --only ar1_u_over_umf2_r2 ar1_u_over_umf2.9_r2` (AR-1 at 2-2.9 Umf: 20-30 min
-# each), and archive them; the long runs stopped wait at their checkpoints and go first again next time.
+# eighteenth and twenty-fifth sessions), so start it with the session's end less the half hour the archive takes,
+# `studies/campaign.sh --until 04:40` (since the twenty-eighth session): a free worker then takes first the runs
+# expected to end by then, and at 04:40 the running runs checkpoint and the study exits; archive what ended.
+# (Before, the study was stopped by hand and started again with --only and the runs that end in that hour.)
 # Two runs at a time, one numba thread each (more threads than free cores stall OpenMP: docs/benchmarks.md).
 # Stage 1 (studies/mema2020_stage1.toml) runs beside it, one run at a time, while it has runs left (its ended
 # runs come back from docs/data/mema2020_stage1 and are skipped; once all have ended it exits at once: every one

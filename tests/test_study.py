@@ -1788,6 +1788,78 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     assert len(live.drain()) == 2 and len(live) == 0
 
 
+def test_until_takes_a_clock_time_an_iso_time_or_a_duration_and_refuses_a_past_or_wrong_one():
+    """``--until``: "+<duration>" from now, "HH:MM[:SS]" at its next occurrence (tomorrow once passed today), an
+    ISO date and time; a moment not to come, or no such form, is None (the command line's usage error, exit 2)."""
+    from datetime import datetime, timedelta
+
+    from fvdem.study.cluster import until_epoch
+    now = datetime(2026, 12, 5, 2, 30).astimezone().timestamp()  # local 02:30
+    assert until_epoch("+90m", now) == now + 5400 and until_epoch("+1:30:00", now) == now + 5400
+    assert until_epoch("+2h", now) == now + 7200
+    assert until_epoch("04:45", now) == now + 8100  # today, 2 h 15 min on
+    assert until_epoch("04:45:30", now) == now + 8130
+    assert until_epoch("01:00", now) == (datetime(2026, 12, 5, 1, 0).astimezone() + timedelta(days=1)).timestamp()
+    assert until_epoch("2026-12-05T04:45", now) == now + 8100
+    assert until_epoch("2026-12-05T04:45+00:00", now) == datetime.fromisoformat("2026-12-05T04:45+00:00").timestamp()
+    for wrong in ("25:00", "04:61", "+0m", "+soon", "2026-12-05T02:00", "tonight", "", None):
+        assert until_epoch(wrong, now) is None, wrong
+    refused = subprocess.run([sys.executable, "-m", "fvdem", "study", str(ROOT / "studies" / "smoke.toml"), "--out",
+                              "never", "--until", "25:00"], capture_output=True, text=True, timeout=120)
+    assert refused.returncode == 2 and "argument --until: '25:00': a time to come" in refused.stderr
+    assert "Traceback" not in refused.stderr and not Path("never").exists()
+
+
+def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path):
+    """``until``: a freed slot goes first to the runs expected to end before the deadline (their expected
+    simulated seconds left at their family's CPU seconds per simulated second, ``study_status``), in
+    ``_priority`` order among themselves, then the others; a slot is not left idle."""
+    import shutil
+    import time
+
+    from fvdem.study.runner import _Queue, _expected_wall, _fitting
+    from fvdem.study.status import study_status
+    archive = tmp_path / "archive"
+    shutil.copytree(ROOT / "docs" / "data" / "mema2020", archive)
+    short, long = "ar1_u_over_umf2_r2", "ar4_mp_u_over_umf1.6_r2"  # two ended runs, made not started again
+    for name in (short, long):
+        shutil.rmtree(archive / "runs" / name)
+    status = study_status(archive)
+    wall = _expected_wall(archive, 2)
+    for r in status["runs"]:  # each run's expected wall time: its expected seconds left at its family's rate
+        rate = status["families"][r["family"]]["cpu_per_simulated_second"]
+        assert wall[r["name"]] == pytest.approx(r["expected_left"] * rate / 2)
+    assert 0 < wall[short] < wall[long]  # AR-1 to where its first replica ended (8 s), AR-4 MP to 20 s
+    left = {name: seconds for name, seconds in wall.items() if seconds > 0}
+    cut = (wall[short] + wall[long]) / 2
+    study = load_study(ROOT / "studies" / "mema2020_stage2.toml", archive)
+    fitting = _fitting(archive, study.runs, time.time() + cut, 2)
+    names = {r.name for r in study.runs}
+    assert {n for n, w in wall.items() if w <= cut - 5.0} & names <= fitting <= {n for n, w in wall.items() if w <= cut}
+    assert short in fitting and long not in fitting
+    shortest = min(left, key=left.get)
+    queue = _Queue([r for r in study.runs if r.name in left], 1, fits=lambda runs: {shortest})
+    assert [r.name for r in queue.take(0)[1]] == [shortest]  # before every run in progress or longer
+    plain = _Queue([r for r in study.runs if r.name in left], 1)
+    nothing = _Queue([r for r in study.runs if r.name in left], 1, fits=lambda runs: set())
+    assert [r.name for r in nothing.take(0)[1]] == [r.name for r in plain.take(0)[1]]  # none fits: as without
+
+
+def test_a_study_stops_at_its_deadline_with_nothing_lost(tmp_path):
+    """A deadline already past when the study starts: it stops before any run starts (each listed stopped, no
+    folder written), says so in its result, and the same study without the deadline runs them."""
+    import time
+
+    from fvdem.study import run_study
+    out = tmp_path / "study"
+    lines = []
+    result = run_study(load_study(_one_run_study(tmp_path, "until", 0.1), out), out, workers=1,
+                       log=lines.append, until=time.time() - 1.0)
+    assert result["stopped"] and result["until_reached"] and result["until"]
+    assert [r["status"] for r in result["runs"]] == ["stopped"] and not (out / "runs" / "small_u_over_umf2").exists()
+    assert any("--until" in line and "reached: stopping" in line for line in lines)
+
+
 def test_a_run_listed_in_progress_whose_summary_shows_its_end_is_reported_ended(tmp_path):
     """The index can lag its runs (a study stopped before it handed a finished run on listed it "stopped"):
     the report goes by the run's summary, at its end and not stopped early, and counts it ended."""

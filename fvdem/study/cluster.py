@@ -105,6 +105,39 @@ def _duration_seconds(text) -> float | None:
     return float(value) if value is not None and value >= 0 else None
 
 
+def until_epoch(text, now: float | None = None) -> float | None:
+    """The epoch seconds a study's ``--until`` names: ``"+<duration>"`` from ``now`` (``_duration_seconds``'s
+    forms: ``"+90m"``, ``"+2h"``, ``"+1:30:00"``), a clock time ``"HH:MM"`` or ``"HH:MM:SS"`` (local, its next
+    occurrence after ``now``) or an ISO date and time (``"2026-12-05T04:45"``, local unless it has an offset);
+    None if it is none of these, or names a moment not after ``now``."""
+    import re
+    import time
+    from datetime import datetime, timedelta
+    now = time.time() if now is None else now
+    if not isinstance(text, str) or not text.strip():
+        return None
+    text = text.strip()
+    if text.startswith("+"):
+        seconds = _duration_seconds(text[1:])
+        return now + seconds if seconds else None
+    clock = re.fullmatch(r"(\d{1,2}):(\d{2})(?::(\d{2}))?", text)
+    if clock:
+        hour, minute, second = int(clock[1]), int(clock[2]), int(clock[3] or 0)
+        if hour > 23 or minute > 59 or second > 59:
+            return None
+        today = datetime.fromtimestamp(now).astimezone()
+        moment = today.replace(hour=hour, minute=minute, second=second, microsecond=0)
+        if moment.timestamp() <= now:
+            moment += timedelta(days=1)
+        return moment.timestamp()
+    try:
+        moment = datetime.fromisoformat(text)
+    except ValueError:
+        return None
+    moment = moment if moment.tzinfo else moment.astimezone()  # a naive time is local
+    return moment.timestamp() if moment.timestamp() > now else None
+
+
 # a run inside a batch job pauses this long before the job's walltime unless the cluster table says
 # (stop_before_walltime): the current chunk, the checkpoint and the worker's shutdown must fit in it
 DEFAULT_STOP_BEFORE_WALLTIME = 300.0

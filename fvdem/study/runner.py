@@ -128,15 +128,42 @@ def _bed_priority(bed: BedSpec) -> int:
     return BED_RANK if bed.replica == 1 else -(bed.replica - 1) * REPLICA_RANK + REPLICA_RANK // 2
 
 
+def _expected_wall(out: Path, threads: int) -> dict:
+    """Each run's expected wall seconds to its end, by name: the simulated seconds it is likely to run yet
+    (``study_status``'s ``expected_left``: where its point's ended replicas ended, 2 s past its t95 once mixed,
+    else its duration) at its family's CPU seconds per simulated second so far (the slowest family's where its
+    own has none measured) over its ``threads`` (at one thread per run, as the campaign runs, its wall time; a
+    lower bound where threads do not scale). Runs of a study that has measured no rate yet are missing."""
+    from .status import study_status
+    status = study_status(out)
+    rates = {name: family["cpu_per_simulated_second"] for name, family in status["families"].items()}
+    slowest = max((rate for rate in rates.values() if rate), default=None)
+    wall = {}
+    for r in status["runs"]:
+        rate = rates.get(r["family"]) or slowest
+        if rate is not None:
+            wall[r["name"]] = r["expected_left"] * rate / threads
+    return wall
+
+
+def _fitting(out: Path, runs, until: float, threads: int) -> set:
+    """The names of ``runs`` expected to end (``_expected_wall``) before ``until`` (epoch seconds)."""
+    left, wall = until - time.time(), _expected_wall(out, threads)
+    return {r.name for r in runs if r.name in wall and wall[r.name] <= left}
+
+
 class _Queue:
     """The study's runs not yet handed to Dask, handed on in ``_priority`` order as read from their folders
     when a slot frees, never more than ``slots`` at a time (runs at their end, which are only skipped, at
     once). Dask itself orders tasks by priority only among those on one worker: runs submitted all at once go
     to the worker that settled their bed, so a worker could begin a new run while a run in progress waited
-    behind the other (2026-12-03)."""
+    behind the other (2026-12-03). With ``fits`` (runs -> the names of those expected to end in the time left:
+    ``_fitting``, the study's ``until``) the runs that fit go first, in ``_priority`` order among themselves, then
+    the others: a slot is never left idle, and a run that cannot end stops at its checkpoint at the deadline."""
 
-    def __init__(self, runs, slots):
+    def __init__(self, runs, slots, fits=None):
         self.runs, self.slots = list(runs), slots  # slots: a number, or a callable (the live cluster's size)
+        self.fits = fits
 
     def __len__(self) -> int:
         return len(self.runs)
@@ -151,7 +178,8 @@ class _Queue:
         free = (self.slots() if callable(self.slots) else self.slots) - in_flight - len(ended)
         if free <= 0 or not self.runs:
             return ended, []
-        self.runs.sort(key=lambda r: standing[r.name][1], reverse=True)
+        fitting = self.fits(self.runs) if self.fits else set()
+        self.runs.sort(key=lambda r: (r.name in fitting, standing[r.name][1]), reverse=True)
         taken, self.runs = self.runs[:free], self.runs[free:]
         return ended, taken
 
@@ -217,13 +245,16 @@ def _retire(client, address: str, seconds: float = 10.0) -> bool:
         time.sleep(0.25)
 
 
-def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print, poll: float = 30.0) -> dict:
+def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log=print, poll: float = 30.0,
+              until: float | None = None) -> dict:
     """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``).
     SIGINT/SIGTERM (main thread) or ``request_stop(out)`` stop it with every running run checkpointed.
+    ``until`` (epoch seconds: a session's or an allocation's end) stops it so at that time, and until then a
+    freed slot goes first to the runs expected to end before it (``_Queue``, ``_fitting``).
     Progress: the run folders are read every ``poll`` seconds (``_StudyProgress``). One study at a time runs
     in ``out``: a second is refused (``FolderInUse``, naming the first) before it touches anything."""
     with study_lock(study, out):
-        return _run_study(study, Path(out), scheduler, workers, threads, log, poll)
+        return _run_study(study, Path(out), scheduler, workers, threads, log, poll, until)
 
 
 def study_lock(study: Study, out) -> FolderLock:
@@ -232,7 +263,7 @@ def study_lock(study: Study, out) -> FolderLock:
     return FolderLock(out, "study", {"study": study.name, "file": str(study.path)})
 
 
-def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll) -> dict:
+def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, until=None) -> dict:
     from distributed import wait
     out.mkdir(parents=True, exist_ok=True)
     (out / "study.toml").write_text(Path(study.path).read_text())
@@ -268,10 +299,11 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll) 
                                  priority=_priority(run))
 
         run_of, pending = {}, set()  # the futures live in ``pending`` only (a finished one is let go)
+        fits = None if until is None else (lambda runs: _fitting(out, runs, until, threads))
         if scheduler:  # a running cluster: as many runs as it has threads now
-            queue = _Queue(study.runs, lambda: max(1, sum(client.nthreads().values())))
+            queue = _Queue(study.runs, lambda: max(1, sum(client.nthreads().values())), fits)
         else:  # a LocalCluster's workers, or a dask-jobqueue cluster's jobs at most (adaptive: one per run)
-            queue = _Queue(study.runs, worker_count(study.cluster, workers, threads))
+            queue = _Queue(study.runs, worker_count(study.cluster, workers, threads), fits)
 
         def top_up():
             ended, taken = queue.take(len(pending))
@@ -317,12 +349,19 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll) 
         results = []
         write_index(out, study, description=description)
         bar = _StudyProgress(study, started, log)
+        reached = []  # the --until deadline, once reached
         while pending or len(queue):
+            if until is not None and not reached and time.time() >= until:
+                reached.append(time.time())
+                bar.message(f"--until {_clock(until)} reached: stopping; each running run checkpoints at its next "
+                            "chunk; the same command continues the study")
+                request_stop(out)
             top_up()
             if not pending:
                 continue
+            waiting = poll if until is None or reached else min(poll, max(1.0, until - time.time()))
             try:
-                finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
+                finished, pending = wait(pending, timeout=waiting, return_when="FIRST_COMPLETED")
             except TimeoutError:  # Dask's wait raises when nothing finished within the poll: show progress
                 finished = set()
             for future in finished:
@@ -362,8 +401,18 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll) 
                "wall_seconds": time.perf_counter() - started}
     if (out / STOP_FILE).exists():
         summary["stopped"] = True
+    if until is not None:
+        summary["until"] = _clock(until)
+        if reached:
+            summary["until_reached"] = True
     write_text_atomic(out / "study.json", json.dumps(summary, indent=1) + "\n")
     return summary
+
+
+def _clock(epoch: float) -> str:
+    """Local date and time of ``epoch`` to the second, ISO 8601 with its offset."""
+    from datetime import datetime
+    return datetime.fromtimestamp(epoch).astimezone().isoformat(timespec="seconds")
 
 
 def task_tag(study: Study, out) -> str:
