@@ -178,9 +178,21 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     # a run a process writes now is "running", and the hours left are spread over the runs running now
     process = _hold(out / "runs" / "b_r1")
     try:
+        import time
+        before_status = time.time()
         now = study_status(out)
         assert {r["name"]: r["state"] for r in now["runs"]}["b_r1"] == "running"
         assert now["hours_at_running_now"] == pytest.approx(now["left_core_hours"])
+        # its end: the 5 s it is expected to run yet at ar4's 600 CPU s per simulated s, at one thread (its
+        # summary names none), from now, to the minute
+        running = {r["name"]: r for r in now["runs"]}["b_r1"]
+        assert running["expected_cpu_seconds_left"] == pytest.approx(5.0 * 600.0)
+        from datetime import datetime
+        end = datetime.fromisoformat(running["expected_end"]).timestamp()
+        assert before_status + 3000.0 - 60.0 <= end <= time.time() + 3000.0
+        assert "expected_end" not in {r["name"]: r for r in now["runs"]}["b_r2"]  # not running
+        assert main(["study", str(out), "--status"]) == 0
+        assert f"b_r1 about {running['expected_end'][11:16]}" in capsys.readouterr().out
     finally:
         process.send_signal(signal.SIGKILL)
         process.wait()

@@ -135,15 +135,8 @@ def _expected_wall(out: Path, threads: int) -> dict:
     own has none measured) over its ``threads`` (at one thread per run, as the campaign runs, its wall time; a
     lower bound where threads do not scale). Runs of a study that has measured no rate yet are missing."""
     from .status import study_status
-    status = study_status(out)
-    rates = {name: family["cpu_per_simulated_second"] for name, family in status["families"].items()}
-    slowest = max((rate for rate in rates.values() if rate), default=None)
-    wall = {}
-    for r in status["runs"]:
-        rate = rates.get(r["family"]) or slowest
-        if rate is not None:
-            wall[r["name"]] = r["expected_left"] * rate / threads
-    return wall
+    return {r["name"]: r["expected_cpu_seconds_left"] / threads for r in study_status(out)["runs"]
+            if r["expected_cpu_seconds_left"] is not None}
 
 
 def _fitting(out: Path, runs, until: float, threads: int) -> set:

@@ -11,6 +11,7 @@ one (``fvdem study OUT --archive DEST``).
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 from ..io.locks import describe_holder, holder
@@ -27,8 +28,10 @@ STATES = ("ended", "running", "in progress", "partial", "not started", "failed")
 def study_status(out) -> dict:
     """The status of the study folder ``out`` (see the module): ``{"study", "folder", "running" (the lock's
     record of the study process, or None), "scheduler", "runs": [{"name", "family", "point", "replica",
-    "state", "simulated_seconds", "duration", "left", "expected_left", <the report's values>,
-    "cpu_per_simulated_second", "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second",
+    "state", "simulated_seconds", "duration", "left", "expected_left", "expected_cpu_seconds_left" (at its family's
+    rate so far, the slowest family's where its own has none; None before any), "expected_end" (a running run's, at
+    the threads of its last summary, one without), <the report's values>, "cpu_per_simulated_second",
+    "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second",
     "runs_measured", "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
     "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
     "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
@@ -60,6 +63,13 @@ def study_status(out) -> dict:
         family["left_core_hours"] = None if used is None else family["left_simulated_seconds"] * used / 3600.0
         del family["cpu_seconds"], family["simulated"]
     _expect(runs, [entry_folder(out, r) for r in index["runs"]])
+    now = time.time()
+    for r in runs:  # the CPU seconds each run is expected to take yet, and a running run's end at its threads
+        used = families[r["family"]]["cpu_per_simulated_second"] or slowest
+        r["expected_cpu_seconds_left"] = None if used is None else r["expected_left"] * used
+        threads = r.pop("threads", None) or 1
+        if r["state"] == "running" and used is not None:
+            r["expected_end"] = _clock(now + r["expected_cpu_seconds_left"] / threads)
     for name, family in families.items():
         family["expected_left_simulated_seconds"] = sum(r["expected_left"] for r in runs if r["family"] == name)
         used = family["cpu_per_simulated_second"] or slowest
@@ -104,6 +114,12 @@ def _expect(runs: list, folders: list) -> None:
         r["expected_left"] = max(0.0, end - held)
 
 
+def _clock(epoch: float) -> str:
+    """Local date and time of ``epoch`` to the minute, ISO 8601 with its offset."""
+    from datetime import datetime
+    return datetime.fromtimestamp(epoch).astimezone().isoformat(timespec="minutes")
+
+
 def _stop_after_mixed(folder: Path):
     """``time.stop_after_mixed`` [s] of a run's case (its folder's case.toml, read as a case: "2 s" is 2), or None."""
     case = _folder_case(folder)
@@ -146,7 +162,7 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
                     else duration if state == "partial" else max(0.0, duration - held)),
            **values, **watched,
            "cpu_per_simulated_second": cpu / measured if cpu and measured > 0 else None,
-           "peak_memory_mb": summary.get("peak_memory_mb"),
+           "peak_memory_mb": summary.get("peak_memory_mb"), "threads": summary.get("threads"),
            **({"error": r.get("error")} if state == "failed" else {}),
            **({"writer": writer} if writer else {})}
     return row, ((float(cpu), measured) if cpu and measured > 0 else None)
@@ -193,6 +209,10 @@ def format_status(status: dict) -> str:
         lines.append(line)
     elif status["left_simulated_seconds"] > 0:
         lines.append("left: no run has a measured rate yet")
+    ends = [f"{r['name']} about {r['expected_end'][11:16]}" for r in status["runs"] if r.get("expected_end")]
+    if ends:
+        lines.append("expected to end (at their family's CPU seconds per simulated s over the threads of their last "
+                     "run, where their point's ended replicas ended or 2 s past t95): " + ", ".join(ends))
     return "\n".join(lines)
 
 
