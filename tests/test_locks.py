@@ -192,7 +192,9 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
         assert before_status + 3000.0 - 60.0 <= end <= time.time() + 3000.0
         assert "expected_end" not in {r["name"]: r for r in now["runs"]}["b_r2"]  # not running
         assert main(["study", str(out), "--status"]) == 0
-        assert f"b_r1 about {running['expected_end'][11:16]}" in capsys.readouterr().out
+        text = capsys.readouterr().out
+        assert f"b_r1 about {running['expected_end'][11:16]}" in text
+        assert "expected_end" not in text and "expected_cpu" not in text  # a line of their own, not table columns
     finally:
         process.send_signal(signal.SIGKILL)
         process.wait()

@@ -219,7 +219,8 @@ def format_status(status: dict) -> str:
 def _value_columns(runs: list) -> list:
     """The report's value columns the runs have (in the first run's order)."""
     skip = {"name", "family", "point", "replica", "state", "simulated_seconds", "duration", "left", "expected_left",
-            "cpu_per_simulated_second", "peak_memory_mb", "error", "writer"}
+            "expected_cpu_seconds_left", "expected_end", "cpu_per_simulated_second", "peak_memory_mb", "error",
+            "writer"}
     return list(dict.fromkeys(k for r in runs for k in r if k not in skip))
 
 
