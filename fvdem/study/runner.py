@@ -16,6 +16,7 @@ from ..io.locks import FolderLock
 from ..io.run_folder import write_text_atomic
 from .cluster import close_client, make_client, worker_count
 from .reports import report_for
+from .status import _clock, study_status
 from .sweep import BedSpec, RunSpec, Study
 from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, entry_folder,
                     prepare_bed, run_finished, run_task)
@@ -134,7 +135,6 @@ def _expected_wall(out: Path, threads: int) -> dict:
     else its duration) at its family's CPU seconds per simulated second so far (the slowest family's where its
     own has none measured) over its ``threads`` (at one thread per run, as the campaign runs, its wall time; a
     lower bound where threads do not scale). Runs of a study that has measured no rate yet are missing."""
-    from .status import study_status
     return {r["name"]: r["expected_cpu_seconds_left"] / threads for r in study_status(out)["runs"]
             if r["expected_cpu_seconds_left"] is not None}
 
@@ -346,8 +346,8 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
         while pending or len(queue):
             if until is not None and not reached and time.time() >= until:
                 reached.append(time.time())
-                bar.message(f"--until {_clock(until)} reached: stopping; each running run checkpoints at its next "
-                            "chunk; the same command continues the study")
+                bar.message(f"--until {_clock(until, 'seconds')} reached: stopping; each running run checkpoints at "
+                            "its next chunk; the same command continues the study")
                 request_stop(out)
             top_up()
             if not pending:
@@ -395,17 +395,11 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
     if (out / STOP_FILE).exists():
         summary["stopped"] = True
     if until is not None:
-        summary["until"] = _clock(until)
+        summary["until"] = _clock(until, "seconds")
         if reached:
             summary["until_reached"] = True
     write_text_atomic(out / "study.json", json.dumps(summary, indent=1) + "\n")
     return summary
-
-
-def _clock(epoch: float) -> str:
-    """Local date and time of ``epoch`` to the second, ISO 8601 with its offset."""
-    from datetime import datetime
-    return datetime.fromtimestamp(epoch).astimezone().isoformat(timespec="seconds")
 
 
 def task_tag(study: Study, out) -> str:

@@ -114,10 +114,10 @@ def _expect(runs: list, folders: list) -> None:
         r["expected_left"] = max(0.0, end - held)
 
 
-def _clock(epoch: float) -> str:
-    """Local date and time of ``epoch`` to the minute, ISO 8601 with its offset."""
+def _clock(epoch: float, timespec: str = "minutes") -> str:
+    """Local date and time of ``epoch`` (to the minute, or ``timespec``), ISO 8601 with its offset."""
     from datetime import datetime
-    return datetime.fromtimestamp(epoch).astimezone().isoformat(timespec="minutes")
+    return datetime.fromtimestamp(epoch).astimezone().isoformat(timespec=timespec)
 
 
 def _stop_after_mixed(folder: Path):
@@ -212,7 +212,8 @@ def format_status(status: dict) -> str:
     ends = [f"{r['name']} about {r['expected_end'][11:16]}" for r in status["runs"] if r.get("expected_end")]
     if ends:
         lines.append("expected to end (at their family's CPU seconds per simulated s over the threads of their last "
-                     "run, where their point's ended replicas ended or 2 s past t95): " + ", ".join(ends))
+                     "run, where their point's ended replicas ended or time.stop_after_mixed past t95): "
+                     + ", ".join(ends))
     return "\n".join(lines)
 
 
