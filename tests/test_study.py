@@ -306,6 +306,28 @@ def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():
     assert _dense_bed_expansion(None) is None and _dense_bed_expansion({**record, "count": []}) is None
 
 
+def test_how_many_replicas_would_tell_comes_with_their_core_hours():
+    """``_to_tell``: the replicas each series of runs lacks, at a replica's CPU seconds there so far
+    (``_replica_cost``: the mean of the runs at their end, of one column alone where asked), in core-hours."""
+    from fvdem.study.mema2020 import _replica_cost, _to_tell
+
+    def run(family, v, cpu, status="finished", **more):
+        return {"family": family, "gas.u_over_umf": v, "status": status, "cpu_seconds": cpu, **more}
+    rows = [run("ar1", 1.6, 1000.0), run("ar1", 1.6, 3000.0), run("ar1", 1.6, 50.0, status="stopped"),
+            run("ar1", 2.0, 9000.0), run("ar4_mp", 1.6, 7200.0, column="ar4_mp_expansion"), run("ar4_mp", 1.6, 72000.0)]
+    assert _replica_cost(rows, "ar1", 1.6) == 2000.0  # the run on its way left out
+    assert _replica_cost(rows, "ar4_mp", 1.6, "ar4_mp_expansion") == 7200.0  # the runs cut short alone
+    assert _replica_cost(rows, "ar4_mp", 1.6) == (7200.0 + 72000.0) / 2 and _replica_cost(rows, "ar4_sp", 1.6) is None
+    # 14 of each: AR-1 has 4 (10 more at 2000 s), AR-4 MP 3 (11 more at 7200 s): 27.6 core-hours
+    assert _to_tell(14, 4, "[[points]]", [(4, 2000.0), (3, 7200.0)]) == (
+        "about 14 replicas of each would tell, if the means and spread stay: [[points]]; about 27.6 core-hours at "
+        "their runs' cost so far")
+    assert _to_tell(14, 4, "[[points]]", [(4, 2000.0), (3, None)]).endswith("stay: [[points]]")  # a cost unknown
+    one_more = _to_tell(2, 4, "[[points]]", [(4, 3600.0), (4, 3600.0)])  # 5 at least: one more of each, 2 h
+    assert one_more.startswith("about 5 replicas")
+    assert one_more.endswith("about 2 core-hours at their runs' cost so far")
+
+
 def test_a_findings_numbers_read_as_one_line():
     from fvdem.study.reports import describe_values
     assert describe_values({"1.6": {"ar4_mp": "> 20 (not mixed)", "ar1": 16.901617}, "2": {"ar1": [1.7301, 2.0]}}) \
@@ -734,6 +756,15 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     # n) below 0.36 / 2 (the order; likeness would need 0.21 - 0.36 < 0): n = 0.442 / 0.18^2 = 13.6, so 14
     assert "about 14 replicas of each would tell, if the means and spread stay: [[points]] of ar4_mp_expansion and " \
         "ar1_expansion" in spread["why"]
+    assert "core-hours" not in spread["why"]  # no run's cost known
+    # the replicas cut short, with what they cost (AR-4 MP's 2,200 CPU s, AR-1's 1,000): the core-hours of the
+    # replicas each lacks at those costs, only theirs (the full runs' cost is not what a replica cut short takes)
+    cut = [dict(row("ar4_mp_expansion", 1.6, None, end=5.0, height=2.0), cpu_seconds=2200.0),
+           dict(row("ar1_expansion", 1.6, None, end=5.0, height=1.74), cpu_seconds=1000.0)]
+    costed = found([dict(r, cpu_seconds=50000.0) for r in erupted] + cut)[
+        "AR-4 beds expand more than AR-1 at the same U/Umf"]
+    need = int(costed["why"].split("about ")[1].split(" replicas")[0])
+    assert f"; about {(need - 3) * 3200.0 / 3600.0:.3g} core-hours at their runs' cost so far" in costed["why"]
     # alike: 1.75 (1.72, 1.78) against 1.74 (1.73, 1.75), within 10 % with twice the error: not more
     even = erupted[:2] + [row("ar4_mp", 1.6, None, height=h) for h in (1.72, 1.78)]
     alike = found(even)["AR-4 beds expand more than AR-1 at the same U/Umf"]

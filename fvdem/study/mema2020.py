@@ -342,25 +342,43 @@ def _replicas_to_tell(variance: float, difference: float, margin: float | None) 
     return math.ceil(variance / need ** 2) if need > 0 else None
 
 
-def _to_tell(n: int | None, have: int, how: str = "[[points]]") -> str:
+def _to_tell(n: int | None, have: int, how: str = "[[points]]", series=()) -> str:
     """"about n replicas of each would tell ..." (``_replicas_to_tell``), or "more replicas would tell"; ``how``:
-    the study file's way to add them."""
+    the study file's way to add them; with ``series`` (each series of runs it counts: how many it has, and a
+    replica's CPU seconds there so far, ``_replica_cost``) the core-hours the replicas it lacks would take."""
     if n is None:
         return f"more replicas would tell: {how}"
-    return f"about {max(n, have + 1)} replicas of each would tell, if the means and spread stay: {how}"
+    need = max(n, have + 1)
+    costs = [(count, cost) for count, cost in series]
+    hours = (sum(max(0, need - count) * cost for count, cost in costs) / 3600.0
+             if costs and all(cost is not None for _, cost in costs) else None)
+    return (f"about {need} replicas of each would tell, if the means and spread stay: {how}"
+            + ("" if hours is None else f"; about {hours:.3g} core-hours at their runs' cost so far"))
 
 
-def _untold(v, a: list, b: list, gap: float, pair: str, alike: bool = True, how: str = "[[points]]") -> str | None:
+def _replica_cost(rows, family: str, v, column: str | None = None) -> float | None:
+    """A replica's CPU seconds at a point so far: the mean ``cpu_seconds`` of the runs of ``family`` at U/Umf ``v``
+    that reached their end (of those whose own family, ``column``, is ``column`` alone where given: the runs cut
+    short of ``_expansion_runs``); None without one."""
+    cpu = [r["cpu_seconds"] for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v
+           and r["status"] in ENDED and r.get("cpu_seconds") and (column is None or r.get("column") == column)]
+    return sum(cpu) / len(cpu) if cpu else None
+
+
+def _untold(v, a: list, b: list, gap: float, pair: str, alike: bool = True, how: str = "[[points]]",
+            costs: tuple = ()) -> str | None:
     """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
     cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), with how
-    many replicas would tell it (``how``: the study file's way to add them) or, where ``alike`` (the values'
+    many replicas would tell it (``how``: the study file's way to add them; ``costs``: a replica's CPU seconds
+    of each family there, ``_replica_cost``, for the core-hours that takes) or, where ``alike`` (the values'
     likeness is told: ``_alike``), their likeness (``_replicas_to_tell``); or within ``CLOSE`` without replicas.
     None where it can."""
     spread = _within_spread(a, b)
     if spread:
         var, means = _variances(a, b), [sum(x) / len(x) for x in (a, b)]
         n = var and _replicas_to_tell(sum(var), means[0] - means[1], CLOSE * max(means) if alike else None)
-        return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; {_to_tell(n, max(len(a), len(b)), how)})"
+        told = _to_tell(n, max(len(a), len(b)), how, list(zip((len(a), len(b)), costs)))
+        return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; {told})"
     if gap < CLOSE and max(len(a), len(b)) < 2:
         return f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)"
     return None
@@ -394,7 +412,8 @@ def _compare_binarity(rows) -> dict:
     for v in common:
         a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
         values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
-        untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], _gap(a, b), "AR-1 against AR-4 MP")
+        untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], _gap(a, b), "AR-1 against AR-4 MP",
+                         costs=tuple(_replica_cost(rows, f, v) for f in ("ar1", "ar4_mp")))
         alike = untold and _alike(by[v]["ar1"], by[v]["ar4_mp"])
         if alike:  # alike within the noise: AR-1's not more binary
             told[v], values[f"{v:g}"]["alike"] = False, alike
@@ -489,7 +508,8 @@ def _compare(rows, faster, slower, velocities, claim):
                 continue
             faster_at[v], gap = order
             untold = _untold(v, entropy[faster], entropy[slower], gap, f"neither mixed: {faster} against {slower}, "
-                             f"mixing entropy at their end, {ends[faster][0]:g} s", alike=False)
+                             f"mixing entropy at their end, {ends[faster][0]:g} s", alike=False,
+                             costs=tuple(_replica_cost(rows, f, v) for f in pair))
             if untold:  # never alike (``_alike``): near its ceiling 10 % of the entropy spans nearly to fully mixed
                 why.append(untold)
                 del faster_at[v]
@@ -499,7 +519,8 @@ def _compare(rows, faster, slower, velocities, claim):
             why.append(f"{unmixed} not mixed by its end at {v:g} Umf: its mean t95 is only known to exceed "
                        f"{low:.3g} s, against {other:.3g} s (run it longer: [[durations]])")
             continue
-        untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]")
+        untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]",
+                         costs=tuple(_replica_cost(rows, f, v) for f in (faster, slower)))
         # alike within the noise: not faster; where only ``faster``'s mean is a bound (at or above the other's, as
         # here), not below by 10 % is told as well; ``slower``'s bound would bound the wrong side
         alike = untold and mean_b is not None and _alike(counted[faster][v], counted[slower][v], mean_a is None)
@@ -674,9 +695,10 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
         elif bound is None:
             n = _replicas_to_tell(sum(var[top]) + sum(var[v]), abs(difference) - gap, margin) if spreads else None
             have = max(len(counted[f][x]) for f in (slow, fast) for x in (top, v))
+            series = [(len(counted[f][x]), _replica_cost(rows, f, x)) for f in (slow, fast) for x in (top, v)]
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
                           f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; "
-                          f"{_to_tell(n, have)})")
+                          f"{_to_tell(n, have, series=series)})")
         elif gap < bound - noise:
             told[v] = True
         else:
@@ -737,7 +759,8 @@ def _expansion(rows) -> dict:
         ma, mb = sum(a[v]) / len(a[v]), sum(b[v]) / len(b[v])
         values[f"{v:g}"] = {"ar4_mp": a[v], "ar1": b[v]}
         untold = _untold(v, a[v], b[v], _gap(ma, mb), "AR-4 MP against AR-1",
-                         how=f"[[points]] of ar4_mp{EXPANSION} and ar1{EXPANSION}, runs cut short after the window")
+                         how=f"[[points]] of ar4_mp{EXPANSION} and ar1{EXPANSION}, runs cut short after the window",
+                         costs=tuple(_replica_cost(rows, f, v, f + EXPANSION) for f in ("ar4_mp", "ar1")))
         alike = untold and _alike(a[v], b[v])
         if alike:  # alike within the noise: AR-4's does not expand more
             told[v], values[f"{v:g}"]["alike"] = False, alike
@@ -1051,7 +1074,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
     fastest = _window_mean(series, "gas_max_speed", ramp)
     t95 = r.get("t95")
-    return {"t95": t95, "inlet_passes_umf": passes, "column_height": roof,
+    return {"t95": t95, "inlet_passes_umf": passes, "column_height": roof, "cpu_seconds": data.get("cpu_seconds"),
             "t95_from_inlet_at_umf": None if t95 is None or passes is None else t95 - passes,
             "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
             "pressure_drop_std_over_weight": (data["bed_pressure_drop_std_second_half"] / data["bed_weight_per_area"]
