@@ -1889,6 +1889,7 @@ def test_a_study_stops_at_its_deadline_with_nothing_lost(tmp_path):
     assert result["stopped"] and result["until_reached"] and result["until"]
     assert [r["status"] for r in result["runs"]] == ["stopped"] and not (out / "runs" / "small_u_over_umf2").exists()
     assert any("--until" in line and "reached: stopping" in line for line in lines)
+    assert any(line.startswith("stops at ") and "(--until), in 0 h 00 min" in line for line in lines)
 
 
 def test_a_run_listed_in_progress_whose_summary_shows_its_end_is_reported_ended(tmp_path):

@@ -278,6 +278,10 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
     started = time.perf_counter()
     client, description = make_client(study.cluster, scheduler, workers, threads)
     log(f"{description}; Dask dashboard at {getattr(client, 'dashboard_link', None) or 'none'}")
+    if until is not None:
+        minutes = max(0, round((until - time.time()) / 60.0))
+        log(f"stops at {_clock(until, 'seconds')} (--until), in {minutes // 60} h {minutes % 60:02d} min; until then a "
+            "free worker takes first the runs expected to end by then")
     tag = task_tag(study, out)
     chosen = report_for(study.report)
     try:
