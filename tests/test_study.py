@@ -307,9 +307,18 @@ def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():
 
 
 def test_how_many_replicas_would_tell_comes_with_their_core_hours():
-    """``_to_tell``: the replicas each series of runs lacks, at a replica's CPU seconds there so far
-    (``_replica_cost``: the mean of the runs at their end, of one column alone where asked), in core-hours."""
-    from fvdem.study.mema2020 import _replica_cost, _to_tell
+    """``_replicas_to_tell``: the replicas in all of each series that bring the standard error below what tells
+    the difference, at the least cost (equal spreads and costs: equal counts, ``sqrt(sum var / n)``; a series 4
+    times the cost gets half the replicas); ``_to_tell``: them, with the core-hours of those to add at a
+    replica's CPU seconds there so far (``_replica_cost``: the mean of the runs at their end, of one column alone
+    where asked)."""
+    from fvdem.study.mema2020 import _replica_cost, _replicas_to_tell, _to_tell
+    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.2, None) == [200, 200]  # 2 / 200 = 0.1^2
+    assert _replicas_to_tell([(2, 1.0, 4.0), (2, 1.0, 1.0)], 0.2, None) == [150, 300]  # cost 900 against 1,000
+    assert 1 / 150 + 1 / 300 <= 0.01 + 1e-15 < min(1 / 149 + 1 / 300, 1 / 150 + 1 / 299)  # one fewer misses it
+    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.0, None) is None  # nothing to tell
+    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 1e-4, None) is None  # beyond MAX_PLANNED
+    assert _replicas_to_tell([(50, 1.0, None), (50, 1.0, None)], 2.0, None) is None  # none missing
 
     def run(family, v, cpu, status="finished", **more):
         return {"family": family, "gas.u_over_umf": v, "status": status, "cpu_seconds": cpu, **more}
@@ -319,13 +328,12 @@ def test_how_many_replicas_would_tell_comes_with_their_core_hours():
     assert _replica_cost(rows, "ar4_mp", 1.6, "ar4_mp_expansion") == 7200.0  # the runs cut short alone
     assert _replica_cost(rows, "ar4_mp", 1.6) == (7200.0 + 72000.0) / 2 and _replica_cost(rows, "ar4_sp", 1.6) is None
     # 14 of each: AR-1 has 4 (10 more at 2000 s), AR-4 MP 3 (11 more at 7200 s): 27.6 core-hours
-    assert _to_tell(14, 4, "[[points]]", [(4, 2000.0), (3, 7200.0)]) == (
-        "about 14 replicas of each would tell, if the means and spread stay: [[points]]; about 27.6 core-hours at "
-        "their runs' cost so far")
-    assert _to_tell(14, 4, "[[points]]", [(4, 2000.0), (3, None)]).endswith("stay: [[points]]")  # a cost unknown
-    one_more = _to_tell(2, 4, "[[points]]", [(4, 3600.0), (4, 3600.0)])  # 5 at least: one more of each, 2 h
-    assert one_more.startswith("about 5 replicas")
-    assert one_more.endswith("about 2 core-hours at their runs' cost so far")
+    series = [("ar1", 4, 2000.0), ("ar4_mp", 3, 7200.0)]
+    assert _to_tell([14, 14], series) == (
+        "about 14 of ar1 and 14 of ar4_mp in all would tell (now 4 and 3), if the means and spread stay: [[points]]; "
+        "about 27.6 core-hours at their runs' cost so far")
+    assert _to_tell([14, 14], [series[0], ("ar4_mp", 3, None)]).endswith("stay: [[points]]")  # a cost unknown
+    assert _to_tell(None, series) == "more replicas would tell: [[points]]"
 
 
 def test_a_findings_numbers_read_as_one_line():
@@ -687,14 +695,17 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
         "larger t95 (0.485 s)")
     # within the noise with replicas: AR-1 minus AR-4 MP 0.55 s at 2.0 against 0.45 s at 2.9, the per-run
     # variances summing to 0.165 s^2: likeness (0.1 s + 2 errors within 10 % of 4.955 s) needs an error of a
-    # size's difference below 0.198 s, sqrt(0.165 / n): about 5 replicas of each
+    # size's difference below 0.198 s: 5 replicas of each would do (sqrt(0.165 / 5)), but the noisiest series
+    # take more and the quiet ones fewer: 6, 4, 2 and 4 replicas in all (variances 0.076, 0.042, 0.013 and 0.034
+    # over them: 0.038 <= 0.198^2 = 0.0391; one fewer anywhere misses it)
     spread = campaign[:1] + campaign[4:6] + [
         row("ar1", 2.0, 4.21), row("ar1", 2.0, 4.6), row("ar1", 2.9, 3.14), row("ar1", 2.9, 3.3),
         row("ar4_mp", 2.0, 4.81), row("ar4_mp", 2.0, 5.1), row("ar4_mp", 2.9, 2.64), row("ar4_mp", 2.9, 2.9)]
     plan = found(spread)["the AR-1/AR-4 difference shrinks at the highest velocity"]
     assert plan["verdict"] == "open" and "2 Umf: ar1 minus ar4_mp 0.55 s in size against 0.45 s at 2.9 Umf, within " \
-        "2 standard errors of their difference (0.574 s; about 5 replicas of each would tell, if the means and " \
-        "spread stay: [[points]])" in plan["why"]
+        "2 standard errors of their difference (0.574 s; about 6 of ar1 at 2 Umf, 4 of ar4_mp at 2 Umf, 2 of ar1 at " \
+        "2.9 Umf and 4 of ar4_mp at 2.9 Umf in all would tell (now 2, 2, 2 and 2), if the means and spread stay: " \
+        "[[points]])" in plan["why"]
     # a bound that does not reach the size at the top by its noise tells nothing there: open (AR-1 at 19.5 against
     # AR-4 MP unmixed at 20: a size above 0.5 only, against 0.36 at 2.9)
     near = [row("ar1", 1.6, 19.5, end=20.0)] + replicated[1:]
@@ -754,8 +765,11 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
         "(0.94)" in spread["why"]
     # how many replicas would tell, if the means and the spread stay: the standard error sqrt((0.4418 + 0.0002) /
     # n) below 0.36 / 2 (the order; likeness would need 0.21 - 0.36 < 0): n = 0.442 / 0.18^2 = 13.6, so 14
-    assert "about 14 replicas of each would tell, if the means and spread stay: [[points]] of ar4_mp_expansion and " \
-        "ar1_expansion" in spread["why"]
+    # how many would tell, if the means and the spread stay: the standard error sqrt(0.4418 / n_4 + 0.0002 / n_1)
+    # below 0.36 / 2 (the order; likeness would need 0.21 - 0.36 < 0): AR-1's spread is a 2,000th of AR-4 MP's, so
+    # AR-4 MP gets them, 0.4418 / 14 = 0.0316 + 0.0001 <= 0.18^2 = 0.0324 (with 13: 0.0341)
+    assert "about 14 of ar4_mp and 2 of ar1 in all would tell (now 2 and 2), if the means and spread stay: " \
+        "[[points]] of ar4_mp_expansion and ar1_expansion" in spread["why"]
     assert "core-hours" not in spread["why"]  # no run's cost known
     # the replicas cut short, with what they cost (AR-4 MP's 2,200 CPU s, AR-1's 1,000): the core-hours of the
     # replicas each lacks at those costs, only theirs (the full runs' cost is not what a replica cut short takes)
@@ -763,8 +777,11 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
            dict(row("ar1_expansion", 1.6, None, end=5.0, height=1.74), cpu_seconds=1000.0)]
     costed = found([dict(r, cpu_seconds=50000.0) for r in erupted] + cut)[
         "AR-4 beds expand more than AR-1 at the same U/Umf"]
-    need = int(costed["why"].split("about ")[1].split(" replicas")[0])
-    assert f"; about {(need - 3) * 3200.0 / 3600.0:.3g} core-hours at their runs' cost so far" in costed["why"]
+    more = costed["why"].split("about ")[1].split(" in all")[0]  # "<n> of ar4_mp and <m> of ar1"
+    n, m = (int(part.split(" of ")[0]) for part in more.split(" and "))
+    assert "(now 3 and 3)" in costed["why"] and n > m  # AR-4 MP noisier and cheaper per variance cut
+    assert f"; about {((n - 3) * 2200.0 + (m - 3) * 1000.0) / 3600.0:.3g} core-hours at their runs' cost so far" \
+        in costed["why"]
     # alike: 1.75 (1.72, 1.78) against 1.74 (1.73, 1.75), within 10 % with twice the error: not more
     even = erupted[:2] + [row("ar4_mp", 1.6, None, height=h) for h in (1.72, 1.78)]
     alike = found(even)["AR-4 beds expand more than AR-1 at the same U/Umf"]

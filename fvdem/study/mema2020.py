@@ -331,29 +331,54 @@ def _difference_error(a: list, b: list) -> float:
     return CLOSE * max(sum(a) / len(a), sum(b) / len(b)) / SPREAD if error is None else error
 
 
-def _replicas_to_tell(variance: float, difference: float, margin: float | None) -> int | None:
-    """How many replicas of each family would tell a difference (of two means, or of two differences' sizes)
-    either way if the means and the spread stay as they are: its standard error ``sqrt(variance / n)``
-    (``variance``: the sum of the per-run variances of the values it is made of) below ``|difference| / SPREAD``
-    (an order told) or, with a ``margin`` (``_alike``: None where likeness is not told), below ``(margin -
-    |difference|) / SPREAD`` (alike), whichever needs fewer. An estimate for planning ``[[points]]``: the next
-    replicas move the means. None where the difference is 0 and no margin applies."""
+MAX_PLANNED = 5000  # replicas: a difference that would take more is "more replicas would tell"
+
+
+def _replicas_to_tell(series, difference: float, margin: float | None) -> list | None:
+    """How many replicas each series of runs would need in all (its runs so far and the ones to add) to tell a
+    difference (of two means, or of two differences' sizes) either way if the means and the spread stay as they
+    are, at the least cost: the standard error ``sqrt(sum var_i / n_i)`` below ``|difference| / SPREAD`` (an
+    order told) or, with a ``margin`` (``_alike``: None where likeness is not told), below ``(margin -
+    |difference|) / SPREAD`` (alike), whichever is the larger. ``series``: ``(runs so far, per-run variance,
+    a replica's CPU seconds there or None)`` each; replicas are added one at a time where they cut the variance
+    of the difference most per CPU second (per replica where a cost is unknown), which for these sums of
+    ``var / n`` is the cheapest allocation: the noisy and the cheap series get the most. An estimate for planning
+    ``[[points]]``: the next replicas move the means. None where no replica is missing, the difference is 0 and
+    no margin applies, or more than ``MAX_PLANNED`` would be."""
     need = max(abs(difference), (margin or 0.0) - abs(difference)) / SPREAD
-    return math.ceil(variance / need ** 2) if need > 0 else None
+    if need <= 0:
+        return None
+    counts = [max(1, count) for count, _, _ in series]
+    known = all(cost for _, _, cost in series)
+    costs = [cost if known else 1.0 for _, _, cost in series]
+    start = list(counts)
+    while sum(var / n for (_, var, _), n in zip(series, counts)) > need ** 2:
+        if sum(counts) - sum(start) >= MAX_PLANNED:
+            return None
+        best = max(range(len(series)), key=lambda i: series[i][1] / (counts[i] * (counts[i] + 1)) / costs[i])
+        counts[best] += 1
+    return None if counts == start else counts
 
 
-def _to_tell(n: int | None, have: int, how: str = "[[points]]", series=()) -> str:
-    """"about n replicas of each would tell ..." (``_replicas_to_tell``), or "more replicas would tell"; ``how``:
-    the study file's way to add them; with ``series`` (each series of runs it counts: how many it has, and a
-    replica's CPU seconds there so far, ``_replica_cost``) the core-hours the replicas it lacks would take."""
-    if n is None:
+def _to_tell(plan: list | None, series=(), how: str = "[[points]]") -> str:
+    """"about 17 of ar4_mp and 4 of ar1 in all would tell (now 3 and 4) ..." (``_replicas_to_tell``'s ``plan``
+    for ``series``: ``(name, runs so far, a replica's CPU seconds there or None)`` each), with the core-hours
+    the replicas to add would take at those costs (where all are known), or "more replicas would tell"; ``how``:
+    the study file's way to add them."""
+    if plan is None:
         return f"more replicas would tell: {how}"
-    need = max(n, have + 1)
-    costs = [(count, cost) for count, cost in series]
-    hours = (sum(max(0, need - count) * cost for count, cost in costs) / 3600.0
-             if costs and all(cost is not None for _, cost in costs) else None)
-    return (f"about {need} replicas of each would tell, if the means and spread stay: {how}"
+    names = [f"{n} of {name}" for n, (name, _, _) in zip(plan, series)]
+    now = [str(count) for _, count, _ in series]
+    costs = [cost for _, _, cost in series]
+    hours = (sum((n - count) * cost for n, (_, count, cost) in zip(plan, series)) / 3600.0
+             if all(cost is not None for cost in costs) else None)
+    return (f"about {_and(names)} in all would tell (now {_and(now)}), if the means and spread stay: {how}"
             + ("" if hours is None else f"; about {hours:.3g} core-hours at their runs' cost so far"))
+
+
+def _and(items: list) -> str:
+    """"a", "a and b", "a, b and c"."""
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
 def _replica_cost(rows, family: str, v, column: str | None = None) -> float | None:
@@ -366,19 +391,20 @@ def _replica_cost(rows, family: str, v, column: str | None = None) -> float | No
 
 
 def _untold(v, a: list, b: list, gap: float, pair: str, alike: bool = True, how: str = "[[points]]",
-            costs: tuple = ()) -> str | None:
+            names: tuple = ("the first", "the second"), costs: tuple = (None, None)) -> str | None:
     """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
     cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), with how
-    many replicas would tell it (``how``: the study file's way to add them; ``costs``: a replica's CPU seconds
-    of each family there, ``_replica_cost``, for the core-hours that takes) or, where ``alike`` (the values'
-    likeness is told: ``_alike``), their likeness (``_replicas_to_tell``); or within ``CLOSE`` without replicas.
-    None where it can."""
+    many replicas of each (``names``) would tell it at the least cost (``costs``: a replica's CPU seconds of each
+    there, ``_replica_cost``; ``how``: the study file's way to add them) or, where ``alike`` (the values' likeness
+    is told: ``_alike``), their likeness (``_replicas_to_tell``); or within ``CLOSE`` without replicas. None
+    where it can."""
     spread = _within_spread(a, b)
     if spread:
         var, means = _variances(a, b), [sum(x) / len(x) for x in (a, b)]
-        n = var and _replicas_to_tell(sum(var), means[0] - means[1], CLOSE * max(means) if alike else None)
-        told = _to_tell(n, max(len(a), len(b)), how, list(zip((len(a), len(b)), costs)))
-        return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; {told})"
+        series = list(zip(names, (len(a), len(b)), costs))
+        plan = var and _replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, var)],
+                                         means[0] - means[1], CLOSE * max(means) if alike else None)
+        return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; {_to_tell(plan, series, how)})"
     if gap < CLOSE and max(len(a), len(b)) < 2:
         return f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)"
     return None
@@ -412,7 +438,7 @@ def _compare_binarity(rows) -> dict:
     for v in common:
         a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
         values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
-        untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], _gap(a, b), "AR-1 against AR-4 MP",
+        untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], _gap(a, b), "AR-1 against AR-4 MP", names=("ar1", "ar4_mp"),
                          costs=tuple(_replica_cost(rows, f, v) for f in ("ar1", "ar4_mp")))
         alike = untold and _alike(by[v]["ar1"], by[v]["ar4_mp"])
         if alike:  # alike within the noise: AR-1's not more binary
@@ -508,7 +534,7 @@ def _compare(rows, faster, slower, velocities, claim):
                 continue
             faster_at[v], gap = order
             untold = _untold(v, entropy[faster], entropy[slower], gap, f"neither mixed: {faster} against {slower}, "
-                             f"mixing entropy at their end, {ends[faster][0]:g} s", alike=False,
+                             f"mixing entropy at their end, {ends[faster][0]:g} s", alike=False, names=pair,
                              costs=tuple(_replica_cost(rows, f, v) for f in pair))
             if untold:  # never alike (``_alike``): near its ceiling 10 % of the entropy spans nearly to fully mixed
                 why.append(untold)
@@ -520,7 +546,7 @@ def _compare(rows, faster, slower, velocities, claim):
                        f"{low:.3g} s, against {other:.3g} s (run it longer: [[durations]])")
             continue
         untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]",
-                         costs=tuple(_replica_cost(rows, f, v) for f in (faster, slower)))
+                         names=(faster, slower), costs=tuple(_replica_cost(rows, f, v) for f in (faster, slower)))
         # alike within the noise: not faster; where only ``faster``'s mean is a bound (at or above the other's, as
         # here), not below by 10 % is told as well; ``slower``'s bound would bound the wrong side
         alike = untold and mean_b is not None and _alike(counted[faster][v], counted[slower][v], mean_a is None)
@@ -693,12 +719,14 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
                               f"{top:g} Umf, with {SPREAD:g} standard errors ({noise:.3g} s) within "
                               f"{100 * CLOSE:.0f} % of the larger t95 ({margin:.3g} s)")
         elif bound is None:
-            n = _replicas_to_tell(sum(var[top]) + sum(var[v]), abs(difference) - gap, margin) if spreads else None
-            have = max(len(counted[f][x]) for f in (slow, fast) for x in (top, v))
-            series = [(len(counted[f][x]), _replica_cost(rows, f, x)) for f in (slow, fast) for x in (top, v)]
+            series = [(f"{f} at {x:g} Umf", len(counted[f][x]), _replica_cost(rows, f, x))
+                      for x in (v, top) for f in (slow, fast)]
+            spreads_of = [s for x in (v, top) for s in var[x]] if spreads else []
+            plan = _replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, spreads_of)],
+                                     abs(difference) - gap, margin) if spreads else None
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
                           f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; "
-                          f"{_to_tell(n, have, series=series)})")
+                          f"{_to_tell(plan, series)})")
         elif gap < bound - noise:
             told[v] = True
         else:
@@ -760,6 +788,7 @@ def _expansion(rows) -> dict:
         values[f"{v:g}"] = {"ar4_mp": a[v], "ar1": b[v]}
         untold = _untold(v, a[v], b[v], _gap(ma, mb), "AR-4 MP against AR-1",
                          how=f"[[points]] of ar4_mp{EXPANSION} and ar1{EXPANSION}, runs cut short after the window",
+                         names=("ar4_mp", "ar1"),
                          costs=tuple(_replica_cost(rows, f, v, f + EXPANSION) for f in ("ar4_mp", "ar1")))
         alike = untold and _alike(a[v], b[v])
         if alike:  # alike within the noise: AR-4's does not expand more
