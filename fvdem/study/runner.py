@@ -377,10 +377,13 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
                         pending.add(retry)
                         write_index(out, study, [*results, result], description)
                         continue
-                    result = {**result, "status": FAILED, "error": (
-                        f"paused {MAX_STALLS} times in a row at t = {result['simulated_seconds']:.6g} s without "
-                        "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
-                        "it; raise the cluster's walltime or lower stop_before_walltime")}
+                    if (out / STOP_FILE).exists():  # paused at its job's walltime as the study stops: its checkpoint
+                        result = {**result, "status": "stopped"}  # holds it, the next invocation continues it
+                    else:
+                        result = {**result, "status": FAILED, "error": (
+                            f"paused {MAX_STALLS} times in a row at t = {result['simulated_seconds']:.6g} s without "
+                            "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
+                            "it; raise the cluster's walltime or lower stop_before_walltime")}
                 results.append(result)
                 detail = result.get("error") or (chosen.headline(result) if chosen.headline else "")
                 bar.update(len(results))  # the ETA from what this invocation simulated (not runs skipped, restored)
