@@ -269,18 +269,22 @@ def test_the_share_of_the_particles_pinned_at_the_outlet_at_the_end(tmp_path):
 
     import numpy as np
     from fvdem.analysis.plots import COLOUR_LAYERS
-    from fvdem.study.mema2020 import _roof_share
+    from fvdem.scenes.observables import colour_layer_record
+    from fvdem.study.mema2020 import _reaches_roof, _roof_share
     time = np.round(np.arange(0, 6.001, 0.5), 2)
     series = {"time": time, "bed_top": np.where(time >= 1.5, 1.05, 0.5)}
     record = {"z_lower": 0.0, "layer_height": 0.03, "times": [0.0, 6.0],
               "count": [[100] * 34 + [0], [90] * 34 + [40]], "fraction": [[0.5] * 35, [0.5] * 35]}
     (tmp_path / COLOUR_LAYERS).write_text(json.dumps(record))
-    assert _roof_share(tmp_path, series, 1.05) == pytest.approx(40 / (90 * 34 + 40))
-    assert _roof_share(tmp_path, {**series, "bed_top": np.full_like(time, 0.6)}, 1.05) == 0.0  # never up there
+    assert _reaches_roof(series, 1.05) and not _reaches_roof(series, None) and not _reaches_roof(None, 1.05)
+    assert _roof_share(series, 1.05, colour_layer_record(tmp_path)) == pytest.approx(40 / (90 * 34 + 40))
+    low = {**series, "bed_top": np.full_like(time, 0.6)}
+    assert not _reaches_roof(low, 1.05) and _roof_share(low, 1.05, None) == 0.0  # never up there: nothing to read
     short = {**record, "count": [[100] * 20, [100] * 20]}  # no snapshot reached above 0.6 m
     (tmp_path / COLOUR_LAYERS).write_text(json.dumps(short))
-    assert _roof_share(tmp_path, series, 1.05) == 0.0
-    assert _roof_share(tmp_path / "none", series, 1.05) is None and _roof_share(tmp_path, series, None) is None
+    assert _roof_share(series, 1.05, colour_layer_record(tmp_path)) == 0.0
+    assert colour_layer_record(tmp_path / "none") is None and _roof_share(series, 1.05, None) is None
+    assert _roof_share(series, None, record) is None and _roof_share(None, 1.05, record) is None
 
 
 def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():

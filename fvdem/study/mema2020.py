@@ -110,16 +110,24 @@ def _at_roof(series, roof: float | None, ramp: float | None = None):
     return _window_mean(at_roof, "bed_top", ramp)
 
 
-def _roof_share(folder: Path, series, roof: float | None):
+def _reaches_roof(series, roof: float | None) -> bool:
+    """Whether a run's bed top (``bed_top`` of its series) ever stood at the column's outlet (within
+    ``ROOF_MARGIN`` of ``roof`` [m]); False without the column, the series or its bed top."""
+    if roof is None or series is None or "bed_top" not in series or not len(series["bed_top"]):
+        return False
+    return float(series["bed_top"].max()) >= roof - ROOF_MARGIN
+
+
+def _roof_share(series, roof: float | None, record: dict | None):
     """The share of the particles in the column's top layer of the mixing grid (0.03 m under the outlet on the
-    paper's grid) at the run's last particle snapshot (``colour_layer_record``): those pinned at the outlet (AR-4
-    MP at 2.9 Umf: 3.3 % of the rods at 3 s, 4.7 % at 6 s; SP at 2.6: 10 % from 1.5 s on). 0 where the bed's top
-    never reached the outlet (its snapshots are not read then); None without the column, the series or snapshots."""
+    paper's grid) at the run's last particle snapshot, from ``record`` (``colour_layer_record``'s): those pinned
+    at the outlet (AR-4 MP at 2.9 Umf: 3.3 % of the rods at 3 s, 4.7 % at 6 s; SP at 2.6: 10 % from 1.5 s on).
+    0 where the bed's top never reached the outlet (``_reaches_roof``: the record need not be read then); None
+    without the column, the series or the record."""
     if roof is None or series is None or "bed_top" not in series:
         return None
-    if not len(series["bed_top"]) or float(series["bed_top"].max()) < roof - ROOF_MARGIN:
+    if not _reaches_roof(series, roof):
         return 0.0
-    record = colour_layer_record(folder)
     if record is None or not record["count"]:
         return None
     last = record["count"][-1]
@@ -390,8 +398,8 @@ def _replica_cost(rows, family: str, v, column: str | None = None) -> float | No
     return sum(cpu) / len(cpu) if cpu else None
 
 
-def _untold(v, a: list, b: list, gap: float, pair: str, alike: bool = True, how: str = "[[points]]",
-            names: tuple = ("the first", "the second"), costs: tuple = (None, None)) -> str | None:
+def _untold(v, a: list, b: list, gap: float, pair: str, names: tuple, alike: bool = True, how: str = "[[points]]",
+            costs: tuple = (None, None)) -> str | None:
     """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
     cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), with how
     many replicas of each (``names``) would tell it at the least cost (``costs``: a replica's CPU seconds of each
@@ -1103,6 +1111,9 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
     fastest = _window_mean(series, "gas_max_speed", ramp)
     t95 = r.get("t95")
+    # the colour-by-layer record (snapshots read unless archived), once: for the dense bed of an ended run and
+    # the share pinned at the outlet of one whose top reached it
+    layers = colour_layer_record(folder) if r["status"] in ENDED or _reaches_roof(series, roof) else None
     return {"t95": t95, "inlet_passes_umf": passes, "column_height": roof, "cpu_seconds": data.get("cpu_seconds"),
             "t95_from_inlet_at_umf": None if t95 is None or passes is None else t95 - passes,
             "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
@@ -1110,9 +1121,8 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
                                               if "bed_pressure_drop_std_second_half" in data
                                               else data.get("pressure_drop_std_over_weight")),
             "bed_height": _bed_surface(series, ramp), "bed_expansion": _bed_expansion(series, ramp),
-            "dense_bed_expansion": (_dense_bed_expansion(colour_layer_record(folder), ramp)
-                                    if r["status"] in ENDED else None),
-            "bed_at_roof": _at_roof(series, roof, ramp), "roof_share": _roof_share(folder, series, roof),
+            "dense_bed_expansion": _dense_bed_expansion(layers, ramp) if r["status"] in ENDED else None,
+            "bed_at_roof": _at_roof(series, roof, ramp), "roof_share": _roof_share(series, roof, layers),
             "gas_max_speed_over_inlet": (None if fastest is None or gas is None or not gas.inlet_velocity
                                          else fastest / gas.inlet_velocity),
             **(_channel_means(folder, ramp) if r["status"] != FAILED else {}),
