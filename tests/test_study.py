@@ -1640,6 +1640,66 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     assert min(first) > beds["ar1_r2"] == beds["ar4_r2"] > max(second) and max(second) > beds["ar4_r3"] > max(third)
 
 
+def test_a_bed_is_submitted_with_the_first_run_the_queue_hands_on_that_starts_from_it(tmp_path, monkeypatch):
+    """Submitted at the study's start, a later replica's bed took a free worker ahead of the runs in progress
+    (the campaign's restart with new replicas, 2026-12-05: four new beds settled before two runs in progress
+    went on): Dask orders by priority only the tasks it holds, and the queue holds the runs back. A bed goes
+    to Dask with the first run that starts from it; a run at its end is handed on without it."""
+    import distributed
+
+    from fvdem.study import runner
+    submitted, done, states = [], [], []
+
+    class Future:
+        def __init__(self, key, fn, args):
+            self.key, self.fn, self.args = key, fn, args
+
+        def result(self):
+            if not hasattr(self, "value"):
+                self.value = self.fn(*[a.result() if isinstance(a, Future) else a for a in self.args])
+            return self.value
+
+    class Client:
+        def submit(self, fn, *args, key, pure, priority):
+            submitted.append(key.split("-", 2)[2])
+            return Future(key, fn, args)
+
+    def fake_bed(bed, threads):
+        done.append(f"bed-{bed.name}")
+        return f"{bed.name}.npz"
+
+    def fake_run(run, threads, bed_state=None):
+        done.append(f"run-{run.name}")
+        states.append(bed_state)
+        Path(run.folder).mkdir(parents=True, exist_ok=True)
+        (Path(run.folder) / "summary.json").write_text(json.dumps({"simulated_time": run.duration}))
+        return {"name": run.name, "family": run.family, "status": "finished", "folder": run.folder,
+                "simulated_seconds": run.duration, "point": run.point, "bed_state": bed_state}
+
+    def first_completed(pending, timeout=None, return_when=None):  # the earliest submitted run ends first
+        first = next(iter(sorted(pending, key=lambda f: submitted.index(f.key.split("-", 2)[2]))))
+        first.result()
+        return {first}, pending - {first}
+    monkeypatch.setattr(runner, "make_client", lambda *a: (Client(), "fake"))
+    monkeypatch.setattr(runner, "close_client", lambda client: None)
+    monkeypatch.setattr(runner, "prepare_bed", fake_bed)
+    monkeypatch.setattr(runner, "run_task", fake_run)
+    monkeypatch.setattr(distributed, "wait", first_completed)
+    text = SMOKE.read_text().replace("replicas = 1", "replicas = 2").replace('"../cases/', f'"{ROOT / "cases"}/')
+    (tmp_path / "s.toml").write_text(text)
+    study = load_study(tmp_path / "s.toml", tmp_path / "out")
+    summary = runner.run_study(study, tmp_path / "out", workers=2, log=lambda *a: None, poll=0.01)
+    assert [r["status"] for r in summary["runs"]] == ["finished"] * 4
+    assert submitted == ["bed-small", "run-ar1_u_over_umf2_r1", "run-ar1_u_over_umf2.9_r1", "bed-small_r2",
+                         "run-ar1_u_over_umf2_r2", "run-ar1_u_over_umf2.9_r2"]
+    assert done.index("bed-small_r2") > done.index("run-ar1_u_over_umf2_r1")
+    assert states == ["small.npz"] * 2 + ["small_r2.npz"] * 2
+    # again: every run at its end, none settles a bed or gets one
+    submitted.clear(), states.clear()
+    runner.run_study(study, tmp_path / "out", workers=2, log=lambda *a: None, poll=0.01)
+    assert sorted(submitted) == sorted(f"run-{r.name}" for r in study.runs) and states == [None] * 4
+
+
 def test_walltimes_and_durations_in_the_forms_the_schedulers_take():
     from fvdem.study.cluster import _duration_seconds, walltime_seconds
     assert [walltime_seconds(t) for t in ("30", "30:15", "02:00:00", "1-00", "1-02:30", "1-02:30:05", " 01:00:00 ")] == [

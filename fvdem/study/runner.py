@@ -123,9 +123,10 @@ def _standing(run: RunSpec) -> tuple[bool, int]:
 
 
 def _bed_priority(bed: BedSpec) -> int:
-    """A bed settles before the runs of its replica (``_priority``) but after those of the replica before:
-    the first replicas' beds before everything, the own beds of second replicas once every first replica
-    has started."""
+    """A bed's rank among the tasks Dask holds: it goes to Dask with the first run the queue hands on that
+    starts from it (``_run_study``), so that a later replica's bed settles only once the runs before its
+    replica have started; ranked above that run and the runs of its replica (``_priority``), below those of
+    the replica before."""
     return BED_RANK if bed.replica == 1 else -(bed.replica - 1) * REPLICA_RANK + REPLICA_RANK // 2
 
 
@@ -286,13 +287,25 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
     chosen = report_for(study.report)
     try:
         # a bed settles only for runs not at their end (a study restored from its archive settles none
-        # for the runs it holds finished: a run at its end is skipped without its bed's state)
-        needed = {r.bed for r in study.runs if r.bed and not run_finished(r)}
-        beds = {b.name: client.submit(prepare_bed, b, threads, key=f"{tag}bed-{b.name}", pure=False,
-                                      priority=_bed_priority(b)) for b in study.beds if b.name in needed}
+        # for the runs it holds finished: a run at its end is skipped without its bed's state), and only once
+        # the queue hands on the first run that starts from it: submitted at once, a later replica's bed took
+        # the free workers ahead of the runs in progress (Dask's priorities order only the tasks it holds,
+        # and the queue holds the runs back)
+        starting = {r.bed for r in study.runs if r.bed and not run_finished(r)}
+        needed = {b.name: b for b in study.beds if b.name in starting}
+        beds: dict = {}  # bed name -> its future (its state's path once a paused run let the future go)
 
-        def submit(run, key):
-            return client.submit(run_task, run, threads, beds.get(run.bed) if run.bed else None, key=key, pure=False,
+        def bed_of(run):
+            if run.bed not in needed:
+                return None
+            if run.bed not in beds:
+                bed = needed[run.bed]
+                beds[run.bed] = client.submit(prepare_bed, bed, threads, key=f"{tag}bed-{bed.name}", pure=False,
+                                              priority=_bed_priority(bed))
+            return beds[run.bed]
+
+        def submit(run, key, ended=False):
+            return client.submit(run_task, run, threads, None if ended else bed_of(run), key=key, pure=False,
                                  priority=_priority(run))
 
         run_of, pending = {}, set()  # the futures live in ``pending`` only (a finished one is let go)
@@ -310,7 +323,7 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
                                     "simulated_seconds": _simulated_so_far(Path(run.folder)), "point": run.point})
                 taken = []
             for run in ended + taken:
-                future = submit(run, f"{tag}run-{run.name}")
+                future = submit(run, f"{tag}run-{run.name}", ended=run in ended)
                 run_of[future.key] = run
                 pending.add(future)
         attempts = {r.name: 1 for r in study.runs}
