@@ -209,6 +209,35 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     assert main(["study", str(tmp_path), "--status"]) == 2  # not a study folder
 
 
+def test_the_status_says_which_beds_settle_while_the_runs_wait(tmp_path, capsys):
+    """Runs in progress with none running: the study is settling beds (a campaign given new replicas, 2026-12-05,
+    settled four beds for five minutes first). The status lists the beds begun in ``beds/``: settled (a final
+    state and a summary not stopped early), settling (a process holds the folder), in progress (a checkpoint)."""
+    from fvdem.study.status import study_status
+    out = _status_folder(tmp_path)
+    for name, files in (("a", {"final_state.npz": b"s", "summary.json": b'{"simulated_time": 0.4, "cpu_seconds": 150}',
+                               "timeseries.csv": b"time\n0.0\n0.4\n"}),
+                        ("a_r2", {"checkpoint.npz": b"c", "timeseries.csv": b"time\n0.0\n0.2\n",
+                                  "summary.json": b'{"simulated_time": 0.1, "stopped_early": true}'}),
+                        ("a_r3", {"timeseries.csv": b"time\n0.0\n0.05\n"})):
+        (out / "beds" / name).mkdir(parents=True)
+        for file, data in files.items():
+            (out / "beds" / name / file).write_bytes(data)
+    beds = {b["name"]: b for b in study_status(out)["beds"]}
+    assert {n: b["state"] for n, b in beds.items()} == {"a": "settled", "a_r2": "in progress", "a_r3": "begun"}
+    assert beds["a"]["cpu_seconds"] == 150 and beds["a_r2"]["simulated_seconds"] == pytest.approx(0.2)
+    process = _hold(out / "beds" / "a_r3")
+    try:
+        assert {b["name"]: b["state"] for b in study_status(out)["beds"]}["a_r3"] == "settling"
+        assert main(["study", str(out), "--status"]) == 0
+        text = capsys.readouterr().out
+        assert "beds: 1 of 3 begun settled; a_r2 in progress (0.2 s), a_r3 settling (0.05 s)" in text
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    assert study_status(_status_folder(tmp_path / "none"))["beds"] == []
+
+
 def test_the_status_expects_runs_to_end_where_their_point_ended_or_past_their_t95(tmp_path, capsys):
     """Besides the most (every run to its duration), the status expects a run to end where its point's ended
     replicas in its family ended, and a run that has mixed time.stop_after_mixed past its t95."""

@@ -35,7 +35,7 @@ def study_status(out) -> dict:
     "runs_measured", "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
     "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
     "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
-    "unmeasured" (families left without a measured rate), "hours_at_running_now"}``."""
+    "unmeasured" (families left without a measured rate), "hours_at_running_now", "beds" (``_bed_status``)}``."""
     out = Path(out)
     index = json.loads((out / "study.json").read_text())
     chosen = report_for(index.get("report"))
@@ -86,7 +86,29 @@ def study_status(out) -> dict:
             "expected_left_simulated_seconds": sum(row["expected_left"] for row in runs),
             "expected_core_hours": expected_hours, "unmeasured": unmeasured,
             "hours_at_running_now": (left_hours / counts["running"] if left_hours is not None and counts["running"]
-                                     else None)}
+                                     else None),
+            "beds": [_bed_status(folder) for folder in sorted((out / "beds").glob("*")) if folder.is_dir()]}
+
+
+# a bed's state in the status: its final state written (its runs start from it); a process settling it now; a
+# checkpoint it resumes from; begun, neither
+BED_STATES = ("settled", "settling", "in progress", "begun")
+
+
+def _bed_status(folder: Path) -> dict:
+    """A settled bed's folder in the study's ``beds/`` (those of beds the study has not begun do not exist yet):
+    ``{"name", "state" (``BED_STATES``), "simulated_seconds", "cpu_seconds"}``. Beds settle before the runs that
+    start from them: a study whose runs wait with none running is settling their beds."""
+    summary = _summary(folder) or {}
+    series = _series(folder)
+    held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
+    if holder(folder) is not None:
+        state = "settling"
+    elif (folder / "final_state.npz").exists() and summary and not summary.get("stopped_early"):
+        state = "settled"
+    else:
+        state = "in progress" if (folder / CHECKPOINT).exists() else "begun"
+    return {"name": folder.name, "state": state, "simulated_seconds": held, "cpu_seconds": summary.get("cpu_seconds")}
 
 
 def _expect(runs: list, folders: list) -> None:
@@ -209,6 +231,12 @@ def format_status(status: dict) -> str:
         lines.append(line)
     elif status["left_simulated_seconds"] > 0:
         lines.append("left: no run has a measured rate yet")
+    beds = status.get("beds") or []
+    if beds:
+        unsettled = [f"{b['name']} {b['state']} ({b['simulated_seconds']:.3g} s)" for b in beds
+                     if b["state"] != "settled"]
+        lines.append(f"beds: {sum(b['state'] == 'settled' for b in beds)} of {len(beds)} begun settled"
+                     + (f"; {', '.join(unsettled)}" if unsettled else ""))
     ends = [f"{r['name']} about {r['expected_end'][11:16]}" for r in status["runs"] if r.get("expected_end")]
     if ends:
         lines.append("expected to end (at their family's CPU seconds per simulated s over the threads of their last "
