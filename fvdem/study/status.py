@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from ..io.locks import describe_holder, holder
-from ..io.run_folder import CHECKPOINT
+from ..io.run_folder import CHECKPOINT, FINAL_STATE
 from .reports import _series, report_for
 from .tasks import FAILED, _folder_case, _summary, entry_folder
 
@@ -96,7 +96,7 @@ BED_STATES = ("settled", "settling", "in progress", "begun")
 
 
 def _bed_status(folder: Path) -> dict:
-    """A settled bed's folder in the study's ``beds/`` (those of beds the study has not begun do not exist yet):
+    """A bed's folder in the study's ``beds/`` (beds the study has not begun have none yet; an archive keeps none):
     ``{"name", "state" (``BED_STATES``), "simulated_seconds", "cpu_seconds"}``. Beds settle before the runs that
     start from them: a study whose runs wait with none running is settling their beds."""
     summary = _summary(folder) or {}
@@ -104,7 +104,7 @@ def _bed_status(folder: Path) -> dict:
     held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
     if holder(folder) is not None:
         state = "settling"
-    elif (folder / "final_state.npz").exists() and summary and not summary.get("stopped_early"):
+    elif (folder / FINAL_STATE).exists() and summary and not summary.get("stopped_early"):
         state = "settled"
     else:
         state = "in progress" if (folder / CHECKPOINT).exists() else "begun"
