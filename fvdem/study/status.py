@@ -17,7 +17,7 @@ from pathlib import Path
 from ..io.locks import describe_holder, holder
 from ..io.run_folder import CHECKPOINT, FINAL_STATE
 from .reports import _series, report_for
-from .tasks import FAILED, _folder_case, _summary, entry_folder
+from .tasks import FAILED, _folder_case, _simulated_so_far, _summary, entry_folder
 
 # a run's state in the status: at its end; a process writing it now; a checkpoint it resumes from; results
 # without a checkpoint (an archive's copy of a run in progress, a run stopped before its first checkpoint: it
@@ -100,15 +100,14 @@ def _bed_status(folder: Path) -> dict:
     ``{"name", "state" (``BED_STATES``), "simulated_seconds", "cpu_seconds"}``. Beds settle before the runs that
     start from them: a study whose runs wait with none running is settling their beds."""
     summary = _summary(folder) or {}
-    series = _series(folder)
-    held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
     if holder(folder) is not None:
         state = "settling"
     elif (folder / FINAL_STATE).exists() and summary and not summary.get("stopped_early"):
         state = "settled"
     else:
         state = "in progress" if (folder / CHECKPOINT).exists() else "begun"
-    return {"name": folder.name, "state": state, "simulated_seconds": held, "cpu_seconds": summary.get("cpu_seconds")}
+    return {"name": folder.name, "state": state, "simulated_seconds": _simulated_so_far(folder, live=True),
+            "cpu_seconds": summary.get("cpu_seconds")}
 
 
 def _expect(runs: list, folders: list) -> None:
