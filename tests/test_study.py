@@ -1934,7 +1934,7 @@ def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path):
     import shutil
     import time
 
-    from fvdem.study.runner import _Queue, _expected_wall, _fitting
+    from fvdem.study.runner import _Queue, _bed_wall, _expected_wall, _fitting
     from fvdem.study.status import study_status
     archive = tmp_path / "archive"
     shutil.copytree(ROOT / "docs" / "data" / "mema2020", archive)
@@ -1954,6 +1954,27 @@ def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path):
     names = {r.name for r in study.runs}
     assert {n for n, w in wall.items() if w <= cut - 5.0} & names <= fitting <= {n for n, w in wall.items() if w <= cut}
     assert short in fitting and long not in fitting
+    # a run whose bed has not settled yet waits for it too: the settled beds' CPU seconds of its case file (of
+    # every settled bed where none of its case has), over the threads; nothing added where none has settled
+    bed_of = {r.name: r.bed for r in study.runs}
+    beds = {b.name: b for b in study.beds}
+    assert bed_of[short] == "ar1_r2" and bed_of[long] == "ar4_r2"
+    assert _fitting(archive, study.runs, time.time() + wall[short] + 30.0, 2, study.beds) >= {short}
+    for name, cpu in (("ar1", 80.0), ("ar1_expansion", 60.0), ("ar4", 180.0)):
+        folder = Path(beds[name].folder)
+        folder.mkdir(parents=True)
+        (folder / "final_state.npz").write_bytes(b"")
+        (folder / "summary.json").write_text(json.dumps({"cpu_seconds": cpu, "simulated_time": 0.4}))
+    stopped = Path(beds["ar4_r3"].folder)  # a bed stopped early has not settled: it waits too, and is no measure
+    stopped.mkdir(parents=True)
+    (stopped / "final_state.npz").write_bytes(b"")
+    (stopped / "summary.json").write_text(json.dumps({"cpu_seconds": 9.0, "stopped_early": True}))
+    settle = _bed_wall(study.beds, 2)
+    assert settle["ar1_r2"] == pytest.approx(70.0 / 2) and settle["ar4_r2"] == pytest.approx(180.0 / 2)
+    assert settle["ar4_r3"] == pytest.approx(90.0) and "ar4" not in settle and "ar1" not in settle
+    assert settle["ar4_expansion"] == pytest.approx(90.0)  # bed_ar4.toml's settled bed
+    assert short not in _fitting(archive, study.runs, time.time() + wall[short] + 30.0, 2, study.beds)
+    assert short in _fitting(archive, study.runs, time.time() + wall[short] + 40.0, 2, study.beds)
     shortest = min(left, key=left.get)
     queue = _Queue([r for r in study.runs if r.name in left], 1, fits=lambda runs: {shortest})
     assert [r.name for r in queue.take(0)[1]] == [shortest]  # before every run in progress or longer

@@ -16,7 +16,7 @@ from ..io.locks import FolderLock
 from ..io.run_folder import write_text_atomic
 from .cluster import close_client, make_client, worker_count
 from .reports import report_for
-from .status import _clock, study_status
+from .status import _bed_status, _clock, study_status
 from .sweep import BedSpec, RunSpec, Study
 from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, entry_folder,
                     prepare_bed, run_finished, run_task)
@@ -140,10 +140,31 @@ def _expected_wall(out: Path, threads: int) -> dict:
             if r["expected_cpu_seconds_left"] is not None}
 
 
-def _fitting(out: Path, runs, until: float, threads: int) -> set:
-    """The names of ``runs`` expected to end (``_expected_wall``) before ``until`` (epoch seconds)."""
-    left, wall = until - time.time(), _expected_wall(out, threads)
-    return {r.name for r in runs if r.name in wall and wall[r.name] <= left}
+def _bed_wall(beds, threads: int) -> dict:
+    """Each of ``beds`` (``BedSpec``) not settled yet: its expected wall seconds to settle, by name: the mean CPU
+    seconds of the settled beds among them of its case file (of all the settled ones where none of its case has
+    settled), over ``threads``. Missing where no bed has settled yet (a bed of the paper's study settles in 60-180
+    CPU s: ``fvdem study --status`` lists them)."""
+    settled, waiting = {}, []
+    for bed in beds:
+        state = _bed_status(Path(bed.folder)) if Path(bed.folder).is_dir() else {"state": "begun"}
+        if state["state"] == "settled" and state.get("cpu_seconds"):
+            settled.setdefault(bed.case, []).append(float(state["cpu_seconds"]))
+        elif state["state"] != "settled":
+            waiting.append(bed)
+    every = [cpu for cpus in settled.values() for cpu in cpus]
+    wall = {}
+    for bed in waiting if every else ():
+        cpus = settled.get(bed.case, every)
+        wall[bed.name] = sum(cpus) / len(cpus) / threads
+    return wall
+
+
+def _fitting(out: Path, runs, until: float, threads: int, beds=()) -> set:
+    """The names of ``runs`` expected to end (``_expected_wall``, and the settling of a bed of ``beds`` they start
+    from that has not settled yet, ``_bed_wall``) before ``until`` (epoch seconds)."""
+    left, wall, settling = until - time.time(), _expected_wall(out, threads), _bed_wall(beds, threads)
+    return {r.name for r in runs if r.name in wall and wall[r.name] + settling.get(r.bed, 0.0) <= left}
 
 
 class _Queue:
@@ -309,7 +330,7 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
                                  priority=_priority(run))
 
         run_of, pending = {}, set()  # the futures live in ``pending`` only (a finished one is let go)
-        fits = None if until is None else (lambda runs: _fitting(out, runs, until, threads))
+        fits = None if until is None else (lambda runs: _fitting(out, runs, until, threads, study.beds))
         if scheduler:  # a running cluster: as many runs as it has threads now
             queue = _Queue(study.runs, lambda: max(1, sum(client.nthreads().values())), fits)
         else:  # a LocalCluster's workers, or a dask-jobqueue cluster's jobs at most (adaptive: one per run)
