@@ -1972,7 +1972,7 @@ def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path):
     stopped.mkdir(parents=True)
     (stopped / "final_state.npz").write_bytes(b"")
     (stopped / "summary.json").write_text(json.dumps({"cpu_seconds": 9.0, "stopped_early": True}))
-    settle = _bed_wall(study.beds, 2)
+    settle = _bed_wall(study.beds, study_status(archive)["beds"], 2)
     assert settle["ar1_r2"] == pytest.approx(70.0 / 2) and settle["ar4_r2"] == pytest.approx(180.0 / 2)
     assert settle["ar4_r3"] == pytest.approx(90.0) and "ar4" not in settle and "ar1" not in settle
     assert settle["ar4_expansion"] == pytest.approx(90.0)  # bed_ar4.toml's settled bed

@@ -16,7 +16,7 @@ from ..io.locks import FolderLock
 from ..io.run_folder import write_text_atomic
 from .cluster import close_client, make_client, worker_count
 from .reports import report_for
-from .status import _bed_status, _clock, study_status
+from .status import _clock, study_status
 from .sweep import BedSpec, RunSpec, Study
 from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, entry_folder,
                     prepare_bed, run_finished, run_task)
@@ -130,24 +130,25 @@ def _bed_priority(bed: BedSpec) -> int:
     return BED_RANK if bed.replica == 1 else -(bed.replica - 1) * REPLICA_RANK + REPLICA_RANK // 2
 
 
-def _expected_wall(out: Path, threads: int) -> dict:
+def _expected_wall(out: Path, threads: int, status: dict | None = None) -> dict:
     """Each run's expected wall seconds to its end, by name: the simulated seconds it is likely to run yet
     (``study_status``'s ``expected_left``: where its point's ended replicas ended, 2 s past its t95 once mixed,
     else its duration) at its family's CPU seconds per simulated second so far (the slowest family's where its
     own has none measured) over its ``threads`` (at one thread per run, as the campaign runs, its wall time; a
     lower bound where threads do not scale). Runs of a study that has measured no rate yet are missing."""
-    return {r["name"]: r["expected_cpu_seconds_left"] / threads for r in study_status(out)["runs"]
+    return {r["name"]: r["expected_cpu_seconds_left"] / threads for r in (status or study_status(out))["runs"]
             if r["expected_cpu_seconds_left"] is not None}
 
 
-def _bed_wall(beds, threads: int) -> dict:
+def _bed_wall(beds, states: list, threads: int) -> dict:
     """Each of ``beds`` (``BedSpec``) not settled yet: its expected wall seconds to settle, by name: the mean CPU
     seconds of the settled beds among them of its case file (of all the settled ones where none of its case has
-    settled), over ``threads``. Missing where no bed has settled yet (a bed of the paper's study settles in 60-180
-    CPU s: ``fvdem study --status`` lists them)."""
+    settled), over ``threads``; ``states``: ``study_status``'s ``beds`` (a bed without a folder has not begun).
+    Missing where no bed has settled yet (a bed of the paper's study settles in 60-180 CPU s)."""
+    state_of = {state["name"]: state for state in states}
     settled, waiting = {}, []
     for bed in beds:
-        state = _bed_status(Path(bed.folder)) if Path(bed.folder).is_dir() else {"state": "begun"}
+        state = state_of.get(bed.name, {"state": "begun"})
         if state["state"] == "settled" and state.get("cpu_seconds"):
             settled.setdefault(bed.case, []).append(float(state["cpu_seconds"]))
         elif state["state"] != "settled":
@@ -163,7 +164,9 @@ def _bed_wall(beds, threads: int) -> dict:
 def _fitting(out: Path, runs, until: float, threads: int, beds=()) -> set:
     """The names of ``runs`` expected to end (``_expected_wall``, and the settling of a bed of ``beds`` they start
     from that has not settled yet, ``_bed_wall``) before ``until`` (epoch seconds)."""
-    left, wall, settling = until - time.time(), _expected_wall(out, threads), _bed_wall(beds, threads)
+    status = study_status(out)  # one read of the folder for both
+    wall, settling = _expected_wall(out, threads, status), _bed_wall(beds, status["beds"], threads)
+    left = until - time.time()
     return {r.name for r in runs if r.name in wall and wall[r.name] + settling.get(r.bed, 0.0) <= left}
 
 
