@@ -236,20 +236,28 @@ def cmd_study(args) -> int:
 def _changed_folders(study, out, supersede: bool, log) -> int:
     """Folders of ``out`` started with other physics than ``study`` now sets: refused (exit 2, each named with
     the keys that differ), or with ``--supersede`` moved to ``out/superseded/`` (one line each)."""
-    from .study.folders import SUPERSEDED, changed_folders
+    from .study.folders import SUPERSEDED, changed_folders, unplanned_folders
     from .study.folders import supersede as move_aside
     changed = changed_folders(study)
-    if not changed:
+    unplanned = unplanned_folders(study, out)
+    if unplanned and not supersede:  # not in the way: the study never starts them, its status sets them apart
+        log(f"note: {len(unplanned)} run(s) {study.path} no longer lists hold folders in {out} and have not ended "
+            f"(not planned: neither run nor counted): {', '.join(name for name, _ in unplanned)}; --supersede moves "
+            f"them to {out}/{SUPERSEDED}/")
+    if not changed and not (unplanned and supersede):
         return 0
     lines = [f"  {spec.folder}: {keys}" for spec, keys in changed]
-    if not supersede:
+    if changed and not supersede:
         return _fail(f"{len(changed)} folder(s) in {out} were started with other physics than {study.path} now "
                      "sets:\n" + "\n".join(lines) + f"\nrun again with --supersede to move them to {out}/{SUPERSEDED}/ "
                      "and start their runs again, or restore the study file's settings")
     from .provenance import describe, provenance
+    by = describe(provenance())
     moves = [(spec.name, spec.folder, keys) for spec, keys in changed]
-    for (spec, keys), dest in zip(changed, move_aside(out, moves, describe(provenance()))):
+    for (spec, keys), dest in zip(changed, move_aside(out, moves, by)):
         log(f"superseded: {spec.name} ({keys}) moved to {dest}; it starts again")
+    for (name, _), dest in zip(unplanned, move_aside(out, [(name, folder, None) for name, folder in unplanned], by)):
+        log(f"superseded: {name} (no longer in the study file) moved to {dest}")
     return 0
 
 
@@ -467,7 +475,9 @@ def make_parser() -> argparse.ArgumentParser:
     study.add_argument("--supersede", action="store_true",
                        help="move bed and run folders that were started with other physics than the study file now "
                             "sets (a changed setting) to --out's superseded/ and run them again; without it such "
-                            "folders are refused before anything runs, each named with the keys that differ")
+                            "folders are refused before anything runs, each named with the keys that differ; also "
+                            "moves there the folders of runs the study file no longer lists that have not ended "
+                            "(listed 'not planned' by --status)")
     study.add_argument("--only", nargs="+", metavar="RUN", help="run only these runs (and the beds they need)")
     study.add_argument("--until", type=deadline, metavar="TIME",
                        help="stop at TIME (HH:MM, an ISO date and time, or +DURATION: +150m, +2h, +2:30:00): "

@@ -1049,6 +1049,67 @@ def test_the_index_lists_every_run_and_a_partial_invocation_keeps_the_others_res
     assert index["runs"][1]["duration"] == study.runs[1].duration and index["runs"][1]["replica"] == 1
 
 
+def test_a_run_taken_out_of_the_study_file_after_it_began_is_not_planned_and_supersede_moves_it(tmp_path):
+    """A replica taken out of the study file while it was in progress stayed in the index, and so in ``--status``,
+    "in progress" and counted in what is left, for good (the campaign's fifth AR-4 MP bed cut short at 1.6 Umf,
+    thirtieth session, 2026-12-05, moved aside by hand): it is listed not planned, neither counted nor waited for,
+    back to planned where the file lists it again, and ``--supersede`` moves its folder to superseded/."""
+    from fvdem.cli import _changed_folders
+    from fvdem.study import report
+    from fvdem.study.status import format_status, study_status
+    out = tmp_path / "study"
+    study = load_study(SMOKE, out)
+    out.mkdir()
+    first, second = study.runs
+    folder = Path(second.folder)
+    folder.mkdir(parents=True)
+    (folder / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.004,0.2\n")  # 0.004 s of its 0.02
+    (folder / "checkpoint.npz").write_bytes(b"a checkpoint")
+    write_index(out, study, [{"name": second.name, "family": second.family, "status": "stopped",
+                              "folder": str(folder), "point": second.point}])
+    assert {r["name"]: r["state"] for r in study_status(out)["runs"]} == {first.name: "not started",
+                                                                         second.name: "in progress"}
+    fewer = replace(study, runs=study.runs[:1])
+    index = write_index(out, fewer)
+    assert [(r["name"], r.get("planned")) for r in index["runs"]] == [(first.name, None), (second.name, False)]
+    status = study_status(out)
+    assert {r["name"]: r["state"] for r in status["runs"]} == {first.name: "not started", second.name: "not planned"}
+    assert status["left_simulated_seconds"] == pytest.approx(first.duration)  # the other's 0.016 s not counted
+    assert status["expected_left_simulated_seconds"] == pytest.approx(first.duration)
+    text = format_status(status)
+    assert f"1 not started of 1 runs; 0 of {first.duration:g} simulated s done" in text
+    assert "1 run(s) not planned" in text and "--supersede" in text
+    report(out)  # the table lists it; the findings neither count nor draw it
+    rows = {r["name"]: r["status"] for r in json.loads((out / "table.json").read_text())}
+    assert rows == {first.name: "pending", second.name: "not planned"}
+    page = (out / "findings.md").read_text()
+    assert "0 of 1 runs at their end, 0 on the way, 1 not started, and 1 not planned" in page
+    # listed again by the file, it is planned again
+    assert "planned" not in write_index(out, study)["runs"][1]
+    assert {r["name"]: r["state"] for r in study_status(out)["runs"]}[second.name] == "in progress"
+    write_index(out, fewer)
+    # a run without --supersede is not refused (the runner never starts it): a note names it
+    said = []
+    assert _changed_folders(fewer, out, False, said.append) == 0 and folder.is_dir()
+    assert len(said) == 1 and second.name in said[0] and "--supersede" in said[0]
+    said.clear()
+    assert _changed_folders(fewer, out, True, said.append) == 0  # --supersede moves it aside, nothing deleted
+    moved = out / "superseded" / second.name
+    assert not folder.exists() and (moved / "checkpoint.npz").read_bytes() == b"a checkpoint"
+    assert "no longer lists run" in (moved / "SUPERSEDED.txt").read_text()
+    assert len(said) == 1 and str(moved) in said[0]
+    assert [r["name"] for r in write_index(out, fewer)["runs"]] == [first.name]
+    # an ended run the file no longer lists is a result: it stays where it is, planned or not
+    (folder / "summary.json").parent.mkdir(parents=True)
+    (folder / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.02,0.2\n")
+    (folder / "summary.json").write_text(json.dumps({"simulated_time": 0.02, "ended": True}))
+    write_index(out, study, [{"name": second.name, "family": second.family, "status": "finished",
+                              "folder": str(folder), "point": second.point}])
+    write_index(out, fewer)
+    assert {r["name"]: r["state"] for r in study_status(out)["runs"]}[second.name] == "ended"
+    assert _changed_folders(fewer, out, True, said.append) == 0 and folder.is_dir()
+
+
 def test_runs_with_more_dem_steps_left_start_first(tmp_path):
     study = load_study(ROOT / "studies" / "mema2020_subset.toml", tmp_path)
     priority = {r.name: _priority(r) for r in study.runs}

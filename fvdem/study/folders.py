@@ -2,7 +2,10 @@
 definition (a family's setting changed in the study file since) would be resumed into a refusal, or, at its
 end, skipped and reported as a run of the new definition; ``changed_folders`` names each such folder with the
 keys that differ before anything runs, and ``supersede`` (``fvdem study --supersede``) moves them aside to
-``OUT/superseded/``, so that their runs start again under the new case. Nothing is deleted."""
+``OUT/superseded/``, so that their runs start again under the new case. A run taken out of the study file
+after it began (a replica or point removed) keeps its folder and its entry in the index, flagged not planned
+(``write_index``); ``unplanned_folders`` names those that have not ended, and ``--supersede`` moves them aside
+too. Nothing is deleted."""
 from __future__ import annotations
 
 import json
@@ -40,20 +43,46 @@ def changed_folders(study) -> list:
     return changed
 
 
+def unplanned_folders(study, out) -> list:
+    """``(name, folder)`` of each run ``out/study.json`` lists that ``study`` no longer plans (neither among its
+    runs nor those ``--only`` left out), whose folder holds something and which has not ended (an ended run is a
+    result: it stays). The runner never starts these; ``supersede`` (with ``keys`` None) moves them aside."""
+    from .status import _run_status
+    from .reports import report_for
+    from .tasks import entry_folder
+    index_path = Path(out) / "study.json"
+    if not index_path.exists():
+        return []
+    index = json.loads(index_path.read_text())
+    planned = {r.name for r in (*study.runs, *study.left_out)}
+    chosen = report_for(index.get("report"))
+    found = []
+    for entry in index.get("runs", []):
+        folder = entry_folder(out, entry) if entry.get("folder") else None
+        if entry["name"] in planned or folder is None or not folder.is_dir():
+            continue
+        state = _run_status(Path(out), {**entry, "planned": False}, chosen)[0]["state"]
+        if state not in ("ended", "running"):
+            found.append((entry["name"], str(folder)))
+    return found
+
+
 def supersede(out, moves, by: str) -> list:
     """Move each ``(name, folder, keys)`` of ``moves`` to ``out/superseded/<name>`` (``<name>-2``, ... if taken),
-    with a ``SUPERSEDED.txt`` saying when, why (``keys``: what changed) and by what (``by``: the code's
-    provenance); their records leave ``out/study.json``, so that the study lists them pending. Returns the new
-    places."""
+    with a ``SUPERSEDED.txt`` saying when, why (``keys``: what changed; None: the study file no longer lists the
+    run) and by what (``by``: the code's provenance); their records leave ``out/study.json``, so that the study
+    lists them pending (or not at all, where it no longer plans them). Returns the new places."""
     out = Path(out)
     moved = []
     for name, folder, keys in moves:
         dest = _free(out / SUPERSEDED / name)
         dest.parent.mkdir(parents=True, exist_ok=True)
         shutil.move(folder, dest)
+        why = (f"the study file no longer lists run {name} and it had not ended; the study does not run it"
+               if keys is None else
+               f"the study now sets other physics for run {name} ({keys}); the study runs it again under its new case")
         (dest / "SUPERSEDED.txt").write_text(
-            f"{folder} moved here on {datetime.now(timezone.utc).isoformat(timespec='seconds')} by {by}: the study "
-            f"now sets other physics for run {name} ({keys}); the study runs it again under its new case\n")
+            f"{folder} moved here on {datetime.now(timezone.utc).isoformat(timespec='seconds')} by {by}: {why}\n")
         moved.append(dest)
     index = out / "study.json"
     if moved and index.exists():

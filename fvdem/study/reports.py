@@ -21,7 +21,7 @@ from typing import Callable
 
 from ..io.locks import LOCK_FILE
 from ..io.run_folder import write_text_atomic
-from .tasks import ENDED, FAILED, IN_PROGRESS, _simulated_so_far, entry_folder
+from .tasks import ENDED, FAILED, IN_PROGRESS, NOT_PLANNED, _simulated_so_far, entry_folder
 
 
 @dataclass(frozen=True)
@@ -115,7 +115,9 @@ def report(out) -> list:
         elif r["status"] in IN_PROGRESS and data and not data.get("stopped_early") and (data.get("ended") or (
                 r.get("duration") and float(data.get("simulated_time") or 0.0) >= r["duration"] * (1 - 1e-9))):
             r = {**r, "status": "finished"}  # its summary shows its end: the index was written before its result
-        if r["status"] != FAILED and (Path(r["folder"]) / "timeseries.csv").exists():
+        if r.get("planned") is False and r["status"] not in ENDED:
+            r = {**r, "status": NOT_PLANNED}  # out of the study file before its end: listed, neither drawn nor counted
+        if r["status"] not in (FAILED, NOT_PLANNED) and (Path(r["folder"]) / "timeseries.csv").exists():
             drawn.append(r)  # the figures get each run with the status derived here (and its live values)
         row = {"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"]}
         if chosen.columns:
@@ -131,7 +133,7 @@ def report(out) -> list:
     (out / "table.csv").write_text("\n".join(lines) + "\n")
     written = paths + [out / "table.csv", out / "table.json"]
     if chosen.findings:
-        findings = chosen.findings(rows)
+        findings = chosen.findings([row for row in rows if row["status"] != NOT_PLANNED])
         (out / "findings.json").write_text(json.dumps(findings, indent=1) + "\n")
         (out / FINDINGS_PAGE).write_text(findings_page(result.get("study"), rows, findings, paths))
         written += [out / "findings.json", out / FINDINGS_PAGE]
@@ -147,13 +149,13 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
     """The findings as a Markdown page: where the study stands (runs at their end, on the way, not started), a
     table of each finding's verdict, the numbers it was decided on and, where it is open, why (its ``note``
     beside them) and its rule, and the report's figures (linked by name: the page lies beside them)."""
-    ended, started = _ran(rows)
+    ended, started, planned = _ran(rows)
     verdicts = {}
     for f in findings:
         verdicts[f["verdict"]] = verdicts.get(f["verdict"], 0) + 1
     lines = [f"# {study or 'study'}: findings", "",
-             f"{ended} of {len(rows)} runs at their end, {started} on the way, {len(rows) - ended - started} not "
-             f"started; {len(findings)} finding{'' if len(findings) == 1 else 's'}: " + ", ".join(
+             f"{ended} of {planned} runs at their end, {started} on the way, {planned - ended - started} not "
+             f"started{_unplanned(rows)}; {len(findings)} finding{'' if len(findings) == 1 else 's'}: " + ", ".join(
                  f"{n} {v if n == 1 else _VERDICT_PLURAL.get(v, v)}"
                  for v, n in sorted(verdicts.items(), key=lambda kv: _VERDICT_ORDER.get(kv[0], 3))) + ".",
              "", "| finding | verdict | numbers | rule |", "|---|---|---|---|"]
@@ -170,10 +172,19 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _ran(rows: list) -> tuple[int, int]:
-    """How many of the table's runs reached their end, and how many others hold simulated time (on the way)."""
+def _ran(rows: list) -> tuple[int, int, int]:
+    """How many of the table's runs reached their end, how many others hold simulated time (on the way), and
+    how many the study plans (all but those ``NOT_PLANNED``)."""
+    rows = [r for r in rows if r["status"] != NOT_PLANNED]
     ended = sum(r["status"] in ENDED for r in rows)
-    return ended, sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows)
+    return ended, sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows), len(rows)
+
+
+def _unplanned(rows: list) -> str:
+    """", and N not planned (...)" where the table lists runs out of the study file that have not ended."""
+    n = sum(r["status"] == NOT_PLANNED for r in rows)
+    return (f", and {n} not planned (out of the study file before their end: listed, neither counted nor drawn; "
+            "fvdem study --supersede moves them to superseded/)") if n else ""
 
 
 def describe_values(values) -> str:
@@ -378,7 +389,7 @@ def results(out, dest) -> Path:
         if made.get("host"):
             hosts.add(f"{made['host']} ({made.get('threads')} thread(s) a run)")
             libraries.add(", ".join(f"{k} {made[k]}" for k in ("fvdem", "python", "numpy", "numba", "fipy") if k in made))
-    ended, started = _ran(rows)
+    ended, started, planned = _ran(rows)
     findings = json.loads((out / "findings.json").read_text()) if (out / "findings.json").exists() else None
     decided = None if findings is None else sum(f["verdict"] != "open" for f in findings)
     study = {
@@ -386,8 +397,8 @@ def results(out, dest) -> Path:
         "date": datetime.date.today().isoformat(),
         "code": {commit: f"{count} run(s)" for commit, count in commits.items()},
         "machine": {"hosts": sorted(hosts), "libraries": sorted(libraries)},
-        "ran": f"{ended} of {len(rows)} runs reached their end, {started} on the way, "
-               f"{len(rows) - ended - started} not started"
+        "ran": f"{ended} of {planned} runs reached their end, {started} on the way, "
+               f"{planned - ended - started} not started{_unplanned(rows)}"
                + ("" if findings is None else f"; {decided} of {len(findings)} findings decided"),
         "runs": [{k: v for k, v in row.items() if k != "folder"} for row in rows],
     }

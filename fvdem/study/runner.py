@@ -469,8 +469,8 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     """``study.json``: every run of ``study`` with its latest result (``results``, else the one on
     record, else ``pending`` with the simulated seconds its folder holds), so that ``--report`` works
     while a study runs; of the runs on record that ``study`` does not list, those ``--only`` left out
-    (``study.left_out``) and those whose folder exists stay, a run taken out of the study file before it
-    started goes; a run ``--only`` left out that the index has never listed (one new in the study file) joins
+    (``study.left_out``) and those whose folder exists stay (flagged ``"planned": false``), a run taken out of
+    the study file before it started goes; a run ``--only`` left out that the index has never listed (one new in the study file) joins
     it pending, so that ``--status`` counts what the study file plans. Returns the index written."""
     out = Path(out)
     path = out / "study.json"
@@ -486,13 +486,16 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     planned = set(names) | {r.name for r in study.left_out}
 
     def listed(run, result=None):  # the run's latest result (else pending) with what the study file says of it
-        return {**(result or _pending(run)), "replica": run.replica, "duration": run.duration, "physics": run.physics}
+        kept = {k: v for k, v in (result or _pending(run)).items() if k != "planned"}  # (planned again)
+        return {**kept, "replica": run.replica, "duration": run.duration, "physics": run.physics}
 
     # the index keeps the runs ``--only`` left out, and a run the study file no longer plans while its folder
-    # holds something (nothing on disk goes unlisted); one it no longer plans that never started (a replica or
-    # point taken out of the file) leaves it
+    # holds something (nothing on disk goes unlisted), flagged ``"planned": false`` (``--status`` and the report
+    # neither count nor wait for it where it has not ended; ``--supersede`` moves its folder aside); one it no
+    # longer plans that never started (a replica or point taken out of the file) leaves it
     runs = ([listed(r, latest.get(r.name)) for r in study.runs]
-            + [r for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))]
+            + [{**{k: v for k, v in r.items() if k != "planned"}, **({} if n in planned else {"planned": False})}
+               for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))]
             + [listed(r) for r in study.left_out if r.name not in latest])
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
              "report": study.report,

@@ -17,12 +17,13 @@ from pathlib import Path
 from ..io.locks import describe_holder, holder
 from ..io.run_folder import CHECKPOINT, FINAL_STATE
 from .reports import _series, report_for
-from .tasks import FAILED, _folder_case, _simulated_so_far, _summary, entry_folder
+from .tasks import FAILED, NOT_PLANNED, _folder_case, _simulated_so_far, _summary, entry_folder
 
 # a run's state in the status: at its end; a process writing it now; a checkpoint it resumes from; results
 # without a checkpoint (an archive's copy of a run in progress, a run stopped before its first checkpoint: it
-# starts again from t = 0); nothing yet; its last attempt failed (its cause in study.json)
-STATES = ("ended", "running", "in progress", "partial", "not started", "failed")
+# starts again from t = 0); nothing yet; its last attempt failed (its cause in study.json); the study file no
+# longer lists it and it has not ended (its folder kept: ``write_index``; nothing left of it is counted)
+STATES = ("ended", "running", "in progress", "partial", "not started", "failed", NOT_PLANNED)
 
 
 def study_status(out) -> dict:
@@ -121,7 +122,7 @@ def _expect(runs: list, folders: list) -> None:
         if r["state"] == "ended":
             ended.setdefault(point, []).append(r["simulated_seconds"])
     for r, folder, point in zip(runs, folders, points):
-        if r["state"] == "ended" or r["duration"] is None:
+        if r["state"] in ("ended", NOT_PLANNED) or r["duration"] is None:
             r["expected_left"] = r["left"]
             continue
         end = r["duration"]
@@ -169,6 +170,8 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
         state = "in progress" if (folder / CHECKPOINT).exists() else "partial"
     else:
         state = "not started"
+    if r.get("planned") is False and state not in ("ended", "running"):
+        state = NOT_PLANNED  # out of the study file: nothing left of it is counted
     if state == "ended":
         values = chosen.run_values(summary) if chosen.run_values else {}
     elif series is not None and chosen.live and chosen.run_values:
@@ -179,7 +182,7 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
     cpu, measured = summary.get("cpu_seconds"), float(summary.get("simulated_time") or 0.0)
     row = {"name": r["name"], "family": r["family"], "point": r.get("point", {}), "replica": r.get("replica"),
            "state": state, "simulated_seconds": held, "duration": duration,
-           "left": (0.0 if state == "ended" or duration is None
+           "left": (0.0 if state in ("ended", NOT_PLANNED) or duration is None
                     else duration if state == "partial" else max(0.0, duration - held)),
            **values, **watched,
            "cpu_per_simulated_second": cpu / measured if cpu and measured > 0 else None,
@@ -208,12 +211,17 @@ def format_status(status: dict) -> str:
         lines.append(f"{r['name']:<{width}}  {r['state']:<11}  {done:>13}  {values}"
                      f"{_cell(r['cpu_per_simulated_second'], '.0f'):>11}  {_cell(r['peak_memory_mb'], '.0f'):>7}")
     counts = status["counts"]
-    total = sum(r["duration"] or r["simulated_seconds"] for r in status["runs"])
+    planned = [r for r in status["runs"] if r["state"] != NOT_PLANNED]
+    total = sum(r["duration"] or r["simulated_seconds"] for r in planned)
     by_family = ", ".join(f"{name} {f['left_simulated_seconds']:.4g}" for name, f in status["families"].items()
                           if f["left_simulated_seconds"] > 0)
-    lines += ["", ", ".join(f"{n} {state}" for state, n in counts.items() if n) + f" of {len(status['runs'])} runs; "
-              f"{total - status['left_simulated_seconds']:.4g} of {total:.4g} simulated s done, "
-              f"{status['left_simulated_seconds']:.4g} left" + (f" ({by_family})" if by_family else "")]
+    lines += ["", ", ".join(f"{n} {state}" for state, n in counts.items() if n and state != NOT_PLANNED)
+              + f" of {len(planned)} runs; {total - status['left_simulated_seconds']:.4g} of {total:.4g} simulated s "
+              f"done, {status['left_simulated_seconds']:.4g} left" + (f" ({by_family})" if by_family else "")]
+    if counts[NOT_PLANNED]:
+        lines.append(f"{counts[NOT_PLANNED]} run(s) not planned: the study file no longer lists them and they have not "
+                     "ended; their folders are kept and not counted (fvdem study STUDY.toml --out "
+                     f"{status['folder']} --supersede moves them to superseded/)")
     lines.append("CPU s per simulated s so far: " + "; ".join(
         f"{name} " + (f"{f['cpu_per_simulated_second']:.0f} ({f['runs_measured']} run(s))"
                       if f["cpu_per_simulated_second"] is not None else "not measured")

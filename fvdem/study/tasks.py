@@ -21,11 +21,13 @@ STOP_FILE = "STOP"  # in a study folder: running runs checkpoint and stop, queue
 # A run's status (study.json, the table): a task's result says "finished" or "resumed" (it reached its end in
 # this call), "skipped" (it had before), "stopped" or "paused" (checkpointed before its end: the study's stop
 # file, its job's walltime) or "failed" (with the cause); the study lists a run without a result "pending";
-# the report derives "running" (its time series has passed its summary) and "pending" (it ended before its
-# duration was raised)
+# the report derives "running" (its time series has passed its summary), "pending" (it ended before its
+# duration was raised) and "not planned" (the study file no longer lists it, its folder holds something and it
+# has not ended: ``write_index`` flags its entry ``"planned": false``; neither counted nor drawn)
 ENDED = ("finished", "resumed", "skipped")
 IN_PROGRESS = ("pending", "stopped", "paused", "running")
 FAILED = "failed"
+NOT_PLANNED = "not planned"
 
 
 # s: how long a worker past its job's deadline holds a run it cannot start before it gives it back; the study
