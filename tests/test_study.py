@@ -580,6 +580,39 @@ def test_values_within_their_spread_are_alike_only_where_the_spread_rules_out_a_
     assert _alike([4.0, 4.3] * 4, [4.15, 4.45] * 4) is not None
 
 
+def test_the_bed_expansion_figure_draws_what_the_finding_counts(tmp_path, monkeypatch):
+    """``bed_expansion.png`` (the report's, from the table's rows) shows the runs the expansion finding counts:
+    a "<family>_expansion" family's runs as their family's, a taller column's in place of the paper's column's
+    at its velocity, a bed whose top stood at the outlet apart (a cross), runs still on their way left out."""
+    import fvdem.study.mema2020 as mema
+    from fvdem.study import check_findings
+
+    def row(family, ratio, height, status="finished", **more):
+        return {"family": family, "status": status, "gas.u_over_umf": ratio, "t95": 3.0, "simulated_seconds": 8.0,
+                "bed_expansion": height, **more}
+
+    rows = [row("ar1", 1.6, 1.73), row("ar1", 1.6, 1.75), row("ar4_mp", 1.6, 1.63), row("ar4_mp", 1.6, 2.57),
+            row("ar4_mp_expansion", 1.6, 2.2), row("ar1_expansion", 1.6, 1.72),
+            row("ar1", 2.9, 3.1, bed_at_roof=1.0), row("ar1_tall", 2.9, 2.7), row("ar4_mp", 2.9, 4.0),
+            row("ar4_mp", 2.9, 5.0, bed_at_roof=0.9), row("ar4_mp", 2.0, 2.8, status="running", t95=None),
+            row("ar4_sp", 1.6, 1.9)]
+    drawn = {}
+    real = mema.plot_expansion
+    monkeypatch.setattr(mema, "plot_expansion", lambda measured, roofed, path: drawn.update(
+        measured=measured, roofed=roofed) or real(measured, roofed, path))
+    assert mema._table_figures(tmp_path, rows) == [tmp_path / "bed_expansion.png"]
+    assert (tmp_path / "bed_expansion.png").stat().st_size > 10_000
+    shown = sorted((r["family"], r["gas.u_over_umf"], r["bed_expansion"]) for r in drawn["measured"])
+    finding = {f["finding"]: f for f in check_findings(rows)}["AR-4 beds expand more than AR-1 at the same U/Umf"]
+    counted = sorted((family, float(v), h) for v, pair in finding["values"].items()
+                     for family, heights in pair.items() for h in heights)
+    assert shown == counted == [("ar1", 1.6, 1.72), ("ar1", 1.6, 1.73), ("ar1", 1.6, 1.75), ("ar1", 2.9, 2.7),
+                                ("ar4_mp", 1.6, 1.63), ("ar4_mp", 1.6, 2.2), ("ar4_mp", 1.6, 2.57),
+                                ("ar4_mp", 2.9, 4.0)]
+    assert [(r["family"], r["bed_expansion"]) for r in drawn["roofed"]] == [("ar4_mp", 5.0)]  # the 1.05 m AR-1 aside
+    assert mema._table_figures(tmp_path, [row("ar4_sp", 1.6, 1.9)]) == []  # neither family: no figure
+
+
 def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expansion_findings():
     from fvdem.study import check_findings
 

@@ -776,11 +776,7 @@ def _expansion(rows) -> dict:
     (``bed_at_roof``) is left out, and a velocity left without a measured run of either family stays open."""
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf"
     rows = _expansion_runs(rows)
-    ended = [r for r in rows if r["status"] in ENDED and r.get("bed_expansion") is not None]
-    # a bed whose top stood at the outlet for most of the window has no height of its own there (``_at_roof``)
-    at_roof = [_roofed(r) for r in ended]
-    roofed = [r for r, roof in zip(ended, at_roof) if roof]
-    measured = [r for r, roof in zip(ended, at_roof) if not roof]
+    measured, roofed = _expansion_sample(rows)
     a, b = _by_velocity(measured, "ar4_mp", "bed_expansion"), _by_velocity(measured, "ar1", "bed_expansion")
     roof = sorted({(r["gas.u_over_umf"], r["family"]) for r in roofed if r["family"] in ("ar4_mp", "ar1")})
     common = sorted(set(a) & set(b))
@@ -815,6 +811,74 @@ def _expansion(rows) -> dict:
     finding = _at_every_velocity(claim, told, why, values, rule)
     dense = _dense_bed_note(measured)
     return {**finding, "note": dense} if dense else finding
+
+
+def _expansion_sample(rows) -> tuple[list, list]:
+    """The runs whose bed expansion counts (ended, with ``bed_expansion``) and, apart, those left out because
+    their bed's top stood at the outlet for most of the window (``_roofed``: no height of its own there)."""
+    ended = [r for r in rows if r["status"] in ENDED and r.get("bed_expansion") is not None]
+    at_roof = [_roofed(r) for r in ended]
+    return ([r for r, roof in zip(ended, at_roof) if not roof], [r for r, roof in zip(ended, at_roof) if roof])
+
+
+def _table_figures(out: Path, rows: list) -> list:
+    """Figures of the table's values, counted as the findings count them (``check_findings``: the runs that
+    mixed or ended, a taller column's in place of the paper's column's at their point): the bed expansion
+    against U/Umf, AR-1 against AR-4 MP (``bed_expansion.png``, ``plot_expansion``)."""
+    counted = _tall_columns([r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS])[0]
+    measured, roofed = _expansion_sample(_expansion_runs(counted))
+    families = ("ar1", "ar4_mp")
+    if not any(r["family"] in families for r in measured):
+        return []
+    return [plot_expansion([r for r in measured if r["family"] in families],
+                           [r for r in roofed if r["family"] in families], out / "bed_expansion.png")]
+
+
+def plot_expansion(measured: list, roofed: list, path) -> Path:
+    """Bed expansion against U/Umf, AR-1 against AR-4 MP, as the finding counts it (``_expansion``; §5.1, where
+    the paper shows it in its snapshots, Figs. 5-6): the bed's top over the window (``_bed_expansion``) over
+    the settled bed's. Each run is a marker (hollow: a run of a "<family>_expansion" family, cut short after the
+    window), the line joins the means of the replicas at each U/Umf, with twice their standard error as a bar
+    (the finding's measure of the spread, ``SPREAD``); a run left out for its bed top at the outlet is a cross."""
+    import numpy as np
+
+    from ..analysis.plots import _pyplot, _save
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    cut_short = left_out = False
+    for family, label in (("ar1", "AR-1"), ("ar4_mp", "AR-4 MP")):
+        by = {}
+        for r in measured:
+            if r["family"] == family:
+                by.setdefault(float(r["gas.u_over_umf"]), []).append(r)
+        if not by:
+            continue
+        ratios = sorted(by)
+        values = [[float(r["bed_expansion"]) for r in by[v]] for v in ratios]
+        means = [float(np.mean(x)) for x in values]
+        bars = [SPREAD * float(np.std(x, ddof=1)) / len(x) ** 0.5 if len(x) > 1 else 0.0 for x in values]
+        line = ax.errorbar(ratios, means, yerr=bars, capsize=3, lw=1.5,
+                           label=f"{label} (runs; the line: mean, bar: {SPREAD:g} standard errors)")
+        colour = line[0].get_color()
+        for v in ratios:
+            offsets = (np.arange(len(by[v])) - (len(by[v]) - 1) / 2) * 0.012
+            for r, dx in zip(by[v], offsets):
+                cut = r.get("column", r["family"]).endswith(EXPANSION)
+                cut_short = cut_short or cut
+                ax.plot(v + dx, r["bed_expansion"], "o", ms=4, color=colour, mfc="none" if cut else colour)
+        for r in roofed:
+            if r["family"] == family:
+                left_out = True
+                ax.plot(float(r["gas.u_over_umf"]), r["bed_expansion"], "x", ms=6, color=colour)
+    if cut_short:
+        ax.plot([], [], "o", ms=4, mfc="none", color="0.3", label="a run cut short after the window (its own bed)")
+    if left_out:
+        ax.plot([], [], "x", ms=6, color="0.3", label="left out: its bed top at the outlet most of the window")
+    ax.set_xlabel("U / Umf")
+    ax.set_ylabel("bed expansion (bed top over the settled bed's)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, Path(path))
 
 
 def _dense_bed_note(rows) -> str | None:
@@ -1228,7 +1292,7 @@ def _headline(result: dict) -> str:
 register_report(StudyReport(
     "mema2020", "seed 000 (Mema et al., 2020): mixing and t95 figures, pressure drop, binarity, the paper's findings",
     run_values=lambda summary: {"t95": summary.get("t95")}, headline=_headline, live=_live, columns=_columns,
-    figures=_figures, findings=check_findings,
+    figures=_figures, table_figures=_table_figures, findings=check_findings,
     archived_columns=("mixing_entropy", "lacey_index", "pressure_drop_over_weight", "bed_pressure_drop", "bed_top",
                       "rms_speed", "max_overlap_over_diameter", "gas_max_speed"),
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",

@@ -35,6 +35,7 @@ class StudyReport:
     live: Callable[[dict], dict] | None = None  # time series of a run in progress -> summary-like values
     columns: Callable[[dict, Path, dict, dict | None], dict] | None = None  # (run, folder, data, series) -> columns
     figures: Callable[[Path, list], list] | None = None  # (study folder, runs with a time series) -> PNG paths
+    table_figures: Callable[[Path, list], list] | None = None  # (study folder, the table's rows) -> PNG paths
     findings: Callable[[list], list] | None = None  # table rows -> findings.json
     archived_columns: tuple = ()  # time-series columns an archive keeps besides ``time``
     archived_summary: tuple = ()  # summary keys an archive keeps besides ``ARCHIVED_SUMMARY``
@@ -127,6 +128,8 @@ def report(out) -> list:
                     "replica": r.get("replica") or int((re.search(r"_r(\d+)$", r["name"]) or [0, 1])[1])})
         rows.append(row)
     paths = list(chosen.figures(out, drawn)) if chosen.figures else []
+    if chosen.table_figures:  # of the values the table and the findings count (the runs the study plans)
+        paths += chosen.table_figures(out, [row for row in rows if row["status"] != NOT_PLANNED])
     (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
     columns = list(dict.fromkeys(k for row in rows for k in row))
     lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]

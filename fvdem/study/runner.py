@@ -470,8 +470,9 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     record, else ``pending`` with the simulated seconds its folder holds), so that ``--report`` works
     while a study runs; of the runs on record that ``study`` does not list, those ``--only`` left out
     (``study.left_out``) and those whose folder exists stay (flagged ``"planned": false``), a run taken out of
-    the study file before it started goes; a run ``--only`` left out that the index has never listed (one new in the study file) joins
-    it pending, so that ``--status`` counts what the study file plans. Returns the index written."""
+    the study file before it started goes; a run ``--only`` left out that the index has never listed (one new in
+    the study file) joins it pending, so that ``--status`` counts what the study file plans. Returns the index
+    written."""
     out = Path(out)
     path = out / "study.json"
     record = {}
