@@ -505,7 +505,22 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
                                               "against 18.2, which with 2 standard errors lies at most 1.67 above it, "
                                               "within 10 % of the larger (2)")
     drag[1]["t95"] = 15.0
-    assert next(f for f in check_findings(mp + drag) if f["finding"] == claim)["verdict"] == "open"
+    open_ = next(f for f in check_findings(mp + drag) if f["finding"] == claim)
+    assert open_["verdict"] == "open"
+    # how many would tell it: the one-sided likeness (MP's bound not below drag only's mean by 10 %, 2 s), the
+    # standard error of the difference below (2 + 2.78) / 2 = 2.39 (drag only's variance 9.857 on both sides, MP's
+    # being unknown: 9.857 (1/4 + 1/3) = 5.75 > 2.39^2 = 5.71, 9.857 / 2 = 4.93 below), not the two-sided order's
+    # 2.78 / 2: 4 of each, 4 more runs (the planner said 11 and 10, 17 more, until the thirty-first session)
+    assert "about 4 of ar4_mp and 4 of ar4_mp_drag in all would tell (now 2 and 2)" in open_["why"]
+    from fvdem.study.mema2020 import _alike, _replicas_to_tell
+    var = 4.44 ** 2 / 2
+    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0, bounded=True) == [4, 4]
+    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0) == [11, 10]  # two-sided: the order
+    # and at these means and spread 4 and 4 do tell it, 4 and 3 not yet
+    d = (0.75 * var) ** 0.5  # four values of mean 17.22 and variance ``var``
+    assert _alike([20.0] * 4, [17.22 + d, 17.22 - d] * 2, bounded=True).startswith("not below: the mean 20")
+    d = var ** 0.5  # three
+    assert _alike([20.0] * 4, [17.22 - d, 17.22, 17.22 + d], bounded=True) is None
     # SP against MP "only a slight effect": mean t95s within 20 % of MP's; an unmixed family's mean a lower
     # bound, which decides once the gap it leaves reaches 20 % (SP mixed at 4.26 s, MP not by 20 s: > 0.79)
     claim = "single- against multi-particle closures: only a slight effect on AR-4 mixing"

@@ -342,18 +342,22 @@ def _difference_error(a: list, b: list) -> float:
 MAX_PLANNED = 5000  # replicas: a difference that would take more is "more replicas would tell"
 
 
-def _replicas_to_tell(series, difference: float, margin: float | None) -> list | None:
+def _replicas_to_tell(series, difference: float, margin: float | None, bounded: bool = False) -> list | None:
     """How many replicas each series of runs would need in all (its runs so far and the ones to add) to tell a
     difference (of two means, or of two differences' sizes) either way if the means and the spread stay as they
     are, at the least cost: the standard error ``sqrt(sum var_i / n_i)`` below ``|difference| / SPREAD`` (an
     order told) or, with a ``margin`` (``_alike``: None where likeness is not told), below ``(margin -
-    |difference|) / SPREAD`` (alike), whichever is the larger. ``series``: ``(runs so far, per-run variance,
-    a replica's CPU seconds there or None)`` each; replicas are added one at a time where they cut the variance
-    of the difference most per CPU second (per replica where a cost is unknown), which for these sums of
+    |difference|) / SPREAD`` (alike), whichever is the larger. ``bounded``: the first mean is a lower bound at or
+    above the second (runs not mixed by their end, ``_alike(bounded=True)``), whose likeness is one-sided (the
+    second does not lie above it by ``margin``): below ``(margin + difference) / SPREAD`` then (the campaign's
+    AR-4 MP at 1.6 Umf, both unmixed at 20 s, against drag only's 19.4 and 15.5 s: 3 more runs, not 16).
+    ``series``: ``(runs so far, per-run variance, a replica's CPU seconds there or None)`` each; replicas are
+    added one at a time where they cut the variance of the difference most per CPU second (per replica where a cost is unknown), which for these sums of
     ``var / n`` is the cheapest allocation: the noisy and the cheap series get the most. An estimate for planning
     ``[[points]]``: the next replicas move the means. None where no replica is missing, the difference is 0 and
     no margin applies, or more than ``MAX_PLANNED`` would be."""
-    need = max(abs(difference), (margin or 0.0) - abs(difference)) / SPREAD
+    alike = 0.0 if margin is None else margin + difference if bounded else margin - abs(difference)
+    need = max(abs(difference), alike) / SPREAD
     if need <= 0:
         return None
     counts = [max(1, count) for count, _, _ in series]
@@ -399,19 +403,19 @@ def _replica_cost(rows, family: str, v, column: str | None = None) -> float | No
 
 
 def _untold(v, a: list, b: list, gap: float, pair: str, names: tuple, alike: bool = True, how: str = "[[points]]",
-            costs: tuple = (None, None)) -> str | None:
+            costs: tuple = (None, None), bounded: bool = False) -> str | None:
     """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
     cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), with how
     many replicas of each (``names``) would tell it at the least cost (``costs``: a replica's CPU seconds of each
     there, ``_replica_cost``; ``how``: the study file's way to add them) or, where ``alike`` (the values' likeness
-    is told: ``_alike``), their likeness (``_replicas_to_tell``); or within ``CLOSE`` without replicas. None
-    where it can."""
+    is told: ``_alike``), their likeness (``_replicas_to_tell``; ``bounded``: ``a``'s mean a lower bound at or
+    above ``b``'s, its likeness one-sided); or within ``CLOSE`` without replicas. None where it can."""
     spread = _within_spread(a, b)
     if spread:
         var, means = _variances(a, b), [sum(x) / len(x) for x in (a, b)]
         series = list(zip(names, (len(a), len(b)), costs))
         plan = var and _replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, var)],
-                                         means[0] - means[1], CLOSE * max(means) if alike else None)
+                                         means[0] - means[1], CLOSE * max(means) if alike else None, bounded)
         return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; {_to_tell(plan, series, how)})"
     if gap < CLOSE and max(len(a), len(b)) < 2:
         return f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)"
@@ -553,11 +557,13 @@ def _compare(rows, faster, slower, velocities, claim):
             why.append(f"{unmixed} not mixed by its end at {v:g} Umf: its mean t95 is only known to exceed "
                        f"{low:.3g} s, against {other:.3g} s (run it longer: [[durations]])")
             continue
+        bounded = mean_a is None and mean_b is not None  # faster's mean a bound at or above slower's (``_alike``)
         untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]",
-                         names=(faster, slower), costs=tuple(_replica_cost(rows, f, v) for f in (faster, slower)))
+                         names=(faster, slower), costs=tuple(_replica_cost(rows, f, v) for f in (faster, slower)),
+                         bounded=bounded)
         # alike within the noise: not faster; where only ``faster``'s mean is a bound (at or above the other's, as
         # here), not below by 10 % is told as well; ``slower``'s bound would bound the wrong side
-        alike = untold and mean_b is not None and _alike(counted[faster][v], counted[slower][v], mean_a is None)
+        alike = untold and mean_b is not None and _alike(counted[faster][v], counted[slower][v], bounded)
         if alike:
             faster_at[v], values[f"{v:g}"]["alike"] = False, alike
         elif untold:
