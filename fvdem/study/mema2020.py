@@ -352,10 +352,10 @@ def _replicas_to_tell(series, difference: float, margin: float | None, bounded: 
     second does not lie above it by ``margin``): below ``(margin + difference) / SPREAD`` then (the campaign's
     AR-4 MP at 1.6 Umf, both unmixed at 20 s, against drag only's 19.4 and 15.5 s: 3 more runs, not 16).
     ``series``: ``(runs so far, per-run variance, a replica's CPU seconds there or None)`` each; replicas are
-    added one at a time where they cut the variance of the difference most per CPU second (per replica where a cost is unknown), which for these sums of
-    ``var / n`` is the cheapest allocation: the noisy and the cheap series get the most. An estimate for planning
-    ``[[points]]``: the next replicas move the means. None where no replica is missing, the difference is 0 and
-    no margin applies, or more than ``MAX_PLANNED`` would be."""
+    added one at a time where they cut the variance of the difference most per CPU second (per replica where a
+    cost is unknown), which for these sums of ``var / n`` is the cheapest allocation: the noisy and the cheap
+    series get the most. An estimate for planning ``[[points]]``: the next replicas move the means. None where
+    no replica is missing, the difference is 0 and no margin applies, or more than ``MAX_PLANNED`` would be."""
     alike = 0.0 if margin is None else margin + difference if bounded else margin - abs(difference)
     need = max(abs(difference), alike) / SPREAD
     if need <= 0:
