@@ -628,6 +628,61 @@ def test_the_bed_expansion_figure_draws_what_the_finding_counts(tmp_path, monkey
     assert mema._table_figures(tmp_path, [row("ar4_sp", 1.6, 1.9)]) == []  # neither family: no figure
 
 
+def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, monkeypatch):
+    """A family "<name>_t95" (<name>'s case ending when it mixes, from beds of its own: t95 is the entropy's first
+    crossing, the same as a whole run's) counts as <name>'s in the t95 findings and Fig. 4, and "<name>_tall_t95"
+    as a taller column's; neither in the bed expansion (a window it may not reach) nor in the void fractions
+    (over the second half of a run that ended at t95)."""
+    from fvdem.study import check_findings
+    from fvdem.study.mema2020 import _figures
+
+    def row(family, v, t95, height, binarity):
+        return {"family": family, "status": "finished", "gas.u_over_umf": v, "t95": t95, "simulated_seconds": 8.0,
+                "bed_expansion": height, "void_fraction_binarity": binarity}
+
+    base = [row("ar1", 2.0, 4.21, 2.11, 0.38), row("ar1", 2.0, 5.45, 2.21, 0.42),
+            row("ar4_mp", 2.0, 4.81, 2.84, 0.49), row("ar4_mp", 2.0, 5.48, 2.56, 0.51),
+            row("ar1_tall", 2.9, 2.89, 2.68, 0.37), row("ar1_tall", 2.9, 3.62, 3.14, 0.38),
+            row("ar4_mp_tall", 2.9, 2.64, 3.8, 0.47), row("ar4_mp_tall", 2.9, 2.89, 4.2, 0.50)]
+    # cut at their t95, with heights and binarities that would turn both findings were they counted
+    cut = [row("ar1_t95", 2.0, 4.6, 3.5, 0.9), row("ar1_t95", 2.0, 4.9, 3.6, 0.9),
+           row("ar4_mp_t95", 2.0, 4.2, 1.2, 0.1), row("ar1_tall_t95", 2.9, 3.1, 3.3, 0.9),
+           row("ar4_mp_tall_t95", 2.9, 2.7, 1.3, 0.1)]
+    as_whole = [dict(r, family=r["family"][:-len("_t95")], bed_expansion=None, void_fraction_binarity=None)
+                for r in cut]
+
+    def found(rows):
+        return {f["finding"]: f for f in check_findings(rows)}
+
+    with_cut, alone, counted = found(base + cut), found(base), found(base + as_whole)
+    expansion, binarity = "AR-4 beds expand more than AR-1 at the same U/Umf", "AR-1 void fractions more binary " \
+        "than AR-4 (Fig. 7)"
+    assert with_cut[expansion] == alone[expansion] and with_cut[binarity] == alone[binarity]
+    shrinks = "the AR-1/AR-4 difference shrinks at the highest velocity (2.9 Umf)"
+    assert with_cut[shrinks] == counted[shrinks] != alone[shrinks]
+    assert with_cut[shrinks]["values"]["difference at 2.9 Umf"] == pytest.approx((2.89 + 3.62 + 3.1) / 3
+                                                                                 - (2.64 + 2.89 + 2.7) / 3)
+    assert {k: f for k, f in with_cut.items() if k not in (expansion, binarity)} == \
+        {k: f for k, f in counted.items() if k not in (expansion, binarity)}
+    # Fig. 4 draws them as their family's, Fig. 7 leaves them out
+    import fvdem.analysis.plots as plots
+    import fvdem.study.mema2020 as mema
+    drawn = {}
+    monkeypatch.setattr(plots, "plot_t95", lambda folders, path, names=None, **kw: drawn.update(t95=sorted(names)))
+    monkeypatch.setattr(mema, "plot_void_fraction_panels", lambda panels, path: drawn.update(
+        fig7={v: sorted(r["name"] for r in pair) for v, pair in panels.items()}))
+    for name in ("plot_mixing_by_velocity", "plot_mixing"):
+        monkeypatch.setattr(plots, name, lambda *args, **kwargs: None)
+    monkeypatch.setattr(mema, "plot_void_fractions", lambda *args, **kwargs: None)
+    runs = [{"name": f"{r['family']}_{k}", "family": r["family"], "status": "finished", "t95": r["t95"],
+             "point": {"gas.u_over_umf": r["gas.u_over_umf"]}, "folder": str(tmp_path / f"run{k}")}
+            for k, r in enumerate(base + cut)]
+    _figures(tmp_path, runs)
+    assert drawn["t95"] == ["ar1"] * 7 + ["ar4_mp"] * 6  # 4 and 4 whole, 3 and 2 cut at t95
+    assert drawn["fig7"] == {2.0: ["ar1_0", "ar1_1", "ar4_mp_2", "ar4_mp_3"],
+                             2.9: ["ar1_tall_4", "ar1_tall_5", "ar4_mp_tall_6", "ar4_mp_tall_7"]}  # whole runs alone
+
+
 def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expansion_findings():
     from fvdem.study import check_findings
 
