@@ -311,15 +311,24 @@ def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():
 
 
 def test_how_many_replicas_would_tell_comes_with_their_core_hours():
-    """``_replicas_to_tell``: the replicas in all of each series that bring the standard error below what tells
-    the difference, at the least cost (equal spreads and costs: equal counts, ``sqrt(sum var / n)``; a series 4
-    times the cost gets half the replicas); ``_to_tell``: them, with the core-hours of those to add at a
-    replica's CPU seconds there so far (``_replica_cost``: the mean of the runs at their end, of one column alone
-    where asked)."""
-    from fvdem.study.mema2020 import _replica_cost, _replicas_to_tell, _to_tell
-    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.2, None) == [200, 200]  # 2 / 200 = 0.1^2
-    assert _replicas_to_tell([(2, 1.0, 4.0), (2, 1.0, 1.0)], 0.2, None) == [150, 300]  # cost 900 against 1,000
-    assert 1 / 150 + 1 / 300 <= 0.01 + 1e-15 < min(1 / 149 + 1 / 300, 1 / 150 + 1 / 299)  # one fewer misses it
+    """``_replicas_to_tell``: the replicas in all of each series that bring the standard error times Student's t
+    (at the plan's degrees of freedom) below what tells the difference, at the least cost (equal spreads and
+    costs: equal counts, ``sqrt(sum var / n)``; a series 4 times the cost gets half the replicas); ``_to_tell``:
+    them, with the core-hours of those to add at a replica's CPU seconds there so far (``_replica_cost``: the mean
+    of the runs at their end, of one column alone where asked)."""
+    from fvdem.study.mema2020 import _critical, _replica_cost, _replicas_to_tell, _satterthwaite, _to_tell
+
+    def margin_squared(n, m):  # t^2 (1 / n + 1 / m) at the Welch-Satterthwaite degrees of freedom, unit variances
+        return _critical(_satterthwaite([1 / n, 1 / m], [n - 1, m - 1])) ** 2 * (1 / n + 1 / m)
+    # many replicas: t about 2 (2.006 at df 401): 202 and 201 bring it below 0.2^2, 201 and 201 do not
+    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.2, None) == [202, 201]
+    assert margin_squared(202, 201) <= 0.04 < margin_squared(201, 201)
+    assert _replicas_to_tell([(2, 1.0, 4.0), (2, 1.0, 1.0)], 0.2, None) == [152, 303]  # cost 911 against 1,000
+    assert margin_squared(152, 303) <= 0.04 < margin_squared(151, 303)
+    # few: two a side already hold the difference to 2 standard errors (2 / 2 = 1 = (2 / 2)^2), but at df 2 t is
+    # 4.53; four a side (df 6, t 2.52: 6.33 x 2 / 4 = 3.17 <= 4), where three (df 4, t 2.87: 8.24 x 2 / 3) fall short
+    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 2.0, None) == [4, 4]
+    assert _critical(2) == pytest.approx(4.5265, abs=1e-4) and _critical(None) == 2.0
     assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.0, None) is None  # nothing to tell
     assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 1e-4, None) is None  # beyond MAX_PLANNED
     assert _replicas_to_tell([(50, 1.0, None), (50, 1.0, None)], 2.0, None) is None  # none missing
@@ -473,9 +482,9 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert uneven["verdict"] == "open" and "their ends differ (too short)" in uneven["why"]
     # replicas, one not mixed by the paper's 20 s: the family's mean t95 is bounded below by counting that run at
     # its end. AR-1 at 16.5 and 17.3 s (mean 16.9): AR-4 MP at > 20 and 19.5 s has a mean above 19.75, slower
-    # (decided: 2.85 s apart, beyond twice the standard error of the difference, 0.94 s); at > 20 and 15 s
-    # (mean above 17.5) the difference, 0.6 s, lies within it (5.06 s): the order is open; at > 20 and 11 s the
-    # mean is only above 15.5: open, run it longer
+    # (decided: 2.85 s apart, beyond Student's t times the standard error of the difference, 5.51 x 0.472 s = 2.60 s
+    # at 1.68 degrees of freedom); at > 20 and 15 s (mean above 17.5) the difference, 0.6 s, lies within it (12.4
+    # x 2.53 s): the order is open; at > 20 and 11 s the mean is only above 15.5: open, run it longer
     ar1 = [dict(row("ar1", 1.6, t), simulated_seconds=t + 2.0) for t in (16.5, 17.3)]
     slower = check_findings(ar1 + [unmixed("ar4_mp", 1.6, 20.0, 0.946), dict(row("ar4_mp", 1.6, 19.5),
                                                                              simulated_seconds=20.0)])[0]
@@ -486,41 +495,45 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
                                                                              simulated_seconds=17.0)])[0]
     assert within["verdict"] == "open"
     assert ("1.6 Umf within the replicas' spread (ar4_mp against ar1, t95 [s]: means 17.5 (20, 15) against 16.9 "
-            "(16.5, 17.3), within 2 standard errors (5.06)") in within["why"]
+            "(16.5, 17.3), within 12.4 standard errors (31.4)") in within["why"]
     unknown = check_findings(ar1 + [unmixed("ar4_mp", 1.6, 20.0, 0.946), dict(row("ar4_mp", 1.6, 11.0),
                                                                               simulated_seconds=13.0)])[0]
     assert unknown["verdict"] == "open" and "only known to exceed 15.5 s, against 16.9 s" in unknown["why"]
     assert "run it longer" in unknown["why"]
     # the campaign's lift and torque at 1.6 Umf: AR-4 MP not mixed by 20 s in either replica (a mean above 20)
     # against drag only at 19.44 and 17.0 s (18.2, standard error of the difference 1.73, taking drag only's
-    # variance for both): within their spread, yet drag only's mean lies at most 18.22 - 20 + 3.45 = 1.67 s above
-    # MP's bound, within 10 % of 20 s: MP is not the faster by 10 %, so lift and torque do not shorten mixing there;
-    # drag only at 19.44 and 15.0 s (up to 3.5 s above) leaves it open
+    # variance for both): within their spread; drag only's mean lies at most 18.22 - 20 + 4.53 x 1.73 = 6.03 s
+    # above MP's bound (Student's t at 2 degrees of freedom): open. With four replicas a side of the same values
+    # (standard error 0.996, df 6, t 2.52) at most 0.73 s above, within 10 % of 20 s: MP is not the faster by
+    # 10 %, so lift and torque do not shorten mixing there; drag only at 19.44 and 15.0 s (up to 14 s above) leaves
+    # it open
     mp = [unmixed("ar4_mp", 1.6, 20.0, 0.946), unmixed("ar4_mp", 1.6, 20.0, 0.852)]
     claim = "lift and torque shorten AR-4 mixing"
     drag = [dict(row("ar4_mp_drag", 1.6, t), simulated_seconds=20.0) for t in (19.44, 17.0)]
-    lift = next(f for f in check_findings(mp + drag) if f["finding"] == claim)
+    two = next(f for f in check_findings(mp + drag) if f["finding"] == claim)
+    assert two["verdict"] == "open" and "within 4.53 standard errors (7.81)" in two["why"]
+    lift = next(f for f in check_findings(mp * 2 + drag * 2) if f["finding"] == claim)
     assert lift["verdict"] == "does not hold"
     assert lift["values"]["1.6"]["alike"] == ("not below: the mean 20, a lower bound (runs not mixed by their end), "
-                                              "against 18.2, which with 2 standard errors lies at most 1.67 above it, "
-                                              "within 10 % of the larger (2)")
+                                              "against 18.2, which with 2.52 standard errors lies at most 0.727 above "
+                                              "it, within 10 % of the larger (2)")
     drag[1]["t95"] = 15.0
     open_ = next(f for f in check_findings(mp + drag) if f["finding"] == claim)
     assert open_["verdict"] == "open"
-    # how many would tell it: the one-sided likeness (MP's bound not below drag only's mean by 10 %, 2 s), the
-    # standard error of the difference below (2 + 2.78) / 2 = 2.39 (drag only's variance 9.857 on both sides, MP's
-    # being unknown: 9.857 (1/4 + 1/3) = 5.75 > 2.39^2 = 5.71, 9.857 / 2 = 4.93 below), not the two-sided order's
-    # 2.78 / 2: 4 of each, 4 more runs (the planner said 11 and 10, 17 more, until the thirty-first session)
-    assert "about 4 of ar4_mp and 4 of ar4_mp_drag in all would tell (now 2 and 2)" in open_["why"]
+    # how many would tell it: the one-sided likeness (MP's bound not below drag only's mean by 10 %, 2 s): t times
+    # the standard error of the difference below 2 + 2.78 = 4.78 (drag only's variance 9.857 on both sides, MP's
+    # being unknown): five of each (df 8, t 2.37: 5.61 x 9.857 x 2 / 5 = 22.1 <= 22.8), not the two-sided order's
+    # 2.78 (12 of each; the planner said 11 and 10 until the thirty-first session, and 4 and 4 with 2 for t)
+    assert "about 5 of ar4_mp and 5 of ar4_mp_drag in all would tell (now 2 and 2)" in open_["why"]
     from fvdem.study.mema2020 import _alike, _replicas_to_tell
     var = 4.44 ** 2 / 2
-    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0, bounded=True) == [4, 4]
-    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0) == [11, 10]  # two-sided: the order
-    # and at these means and spread 4 and 4 do tell it, 4 and 3 not yet
-    d = (0.75 * var) ** 0.5  # four values of mean 17.22 and variance ``var``
-    assert _alike([20.0] * 4, [17.22 + d, 17.22 - d] * 2, bounded=True).startswith("not below: the mean 20")
-    d = var ** 0.5  # three
-    assert _alike([20.0] * 4, [17.22 - d, 17.22, 17.22 + d], bounded=True) is None
+    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0, bounded=True) == [5, 5]
+    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0) == [12, 12]  # two-sided: the order
+    # and at these means and spread five and five do tell it, four and five not yet
+    d = (var / 2.5) ** 0.5  # five values of mean 17.22 and variance ``var``
+    five = [17.22 + k * d for k in (-2, -1, 0, 1, 2)]
+    assert _alike([20.0] * 5, five, bounded=True).startswith("not below: the mean 20")
+    assert _alike([20.0] * 4, five, bounded=True) is None
     # SP against MP "only a slight effect": mean t95s within 20 % of MP's; an unmixed family's mean a lower
     # bound, which decides once the gap it leaves reaches 20 % (SP mixed at 4.26 s, MP not by 20 s: > 0.79)
     claim = "single- against multi-particle closures: only a slight effect on AR-4 mixing"
@@ -533,28 +546,30 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     assert near["verdict"] == "holds" and near["values"]["2"] == pytest.approx(1 / 9)
     short = slight([unmixed("ar4_sp", 2.0, 6.0, 0.9), row("ar4_mp", 2.0, 5.5)])  # SP > 6: the gap > 9 %, unknown
     assert short["verdict"] == "open" and "at 2 Umf" in short["why"]
-    # replicas within their spread yet alike: the difference of the means with twice its standard error within
-    # 10 % of the larger mean decides against a claimed order (AR-4 MP 4.3 s against AR-1 4.35: 0.05 s faster on
-    # the means, within 2 standard errors, 0.224 s; 0.274 s at most, within 0.435 s: not faster). Wider spreads
-    # or a single run each tell no likeness: open
-    alike = check_findings([row("ar1", 2.0, 4.3), row("ar1", 2.0, 4.4), row("ar4_mp", 2.0, 4.2),
-                            row("ar4_mp", 2.0, 4.4)])[0]
+    # replicas within their spread yet alike: the difference of the means with t standard errors within 10 % of
+    # the larger mean decides against a claimed order (AR-4 MP 4.3 s against AR-1 4.35, six replicas each: 0.05 s
+    # faster on the means, within 2.4 x 0.05 s (df 7.4); 0.17 s at most, within 0.435 s: not faster; with two each
+    # the same spread leaves 0.87 s, df 1.5: open). Wider spreads or a single run each tell no likeness: open
+    pairs = [row("ar1", 2.0, 4.3), row("ar1", 2.0, 4.4), row("ar4_mp", 2.0, 4.2), row("ar4_mp", 2.0, 4.4)]
+    assert check_findings(pairs)[0]["verdict"] == "open"
+    alike = check_findings(pairs * 3)[0]
     assert alike["verdict"] == "does not hold"
-    assert alike["values"]["2"]["alike"] == ("alike: the means 4.3 and 4.35 differ by 0.05, with 2 standard errors "
-                                             "at most 0.274, within 10 % of the larger (0.435)")
+    assert alike["values"]["2"]["alike"] == ("alike: the means 4.3 and 4.35 differ by 0.05, with 2.4 standard errors "
+                                             "at most 0.17, within 10 % of the larger (0.435)")
     wide = check_findings([row("ar1", 2.0, 4.0), row("ar1", 2.0, 4.7), row("ar4_mp", 2.0, 4.0),
                            row("ar4_mp", 2.0, 4.6)])[0]
     assert wide["verdict"] == "open" and "replicas' spread" in wide["why"]
     # a bound (a run not mixed by its end, counted there) bounds one side: AR-4 MP's mean above 4.375 against
-    # AR-1's 4.35 (standard error of the difference 0.056) lies at most 0.087 s above it: not faster by 10 %;
+    # AR-1's 4.35 (standard error of the difference 0.056, df 1.5: t 6.61) lies at most 0.344 s above it: not
+    # faster by 10 %;
     # AR-1's mean above 4.375 against AR-4 MP's 4.35 leaves AR-4 MP faster by any amount: open
     bounded = check_findings([dict(row("ar1", 2.0, 4.3), simulated_seconds=8.0),
                               dict(row("ar1", 2.0, 4.4), simulated_seconds=8.0),
                               unmixed("ar4_mp", 2.0, 4.35, 0.9),
                               dict(row("ar4_mp", 2.0, 4.4), simulated_seconds=8.0)])[0]
     assert bounded["verdict"] == "does not hold" and bounded["values"]["2"]["alike"].startswith(
-        "not below: the mean 4.38, a lower bound (runs not mixed by their end), against 4.35, which with 2 standard "
-        "errors lies at most 0.0868 above it")
+        "not below: the mean 4.38, a lower bound (runs not mixed by their end), against 4.35, which with 6.61 "
+        "standard errors lies at most 0.344 above it")
     other = check_findings([unmixed("ar1", 2.0, 4.35, 0.9), dict(row("ar1", 2.0, 4.4), simulated_seconds=8.0),
                             dict(row("ar4_mp", 2.0, 4.3), simulated_seconds=8.0),
                             dict(row("ar4_mp", 2.0, 4.4), simulated_seconds=8.0)])[0]
@@ -574,22 +589,28 @@ def test_replicas_all_counted_at_one_end_have_an_unknown_spread_not_none():
         "spread known"
     assert _within_spread([20.0, 20.0], [15.0]) is None  # 25 % apart: told
     # a spread on one side serves both: 16.5, 17.3 (sample variance 0.32) against 20, 20: error
-    # sqrt(0.32 / 2 + 0.32 / 2) = 0.566, so 3.1 s apart is told and 0.9 s is not
+    # sqrt(0.32 / 2 + 0.32 / 2) = 0.566 with the lender's degree of freedom on both sides (df 2: t 4.53), so 3.1 s
+    # apart is told and 0.9 s is not
     assert _within_spread([20.0, 20.0], [16.5, 17.3]) is None
-    assert "within 2 standard errors (1.13)" in _within_spread([18.0, 18.0], [16.5, 17.3])
+    assert "within 4.53 standard errors (2.56)" in _within_spread([18.0, 18.0], [16.5, 17.3])
 
 
 def test_values_within_their_spread_are_alike_only_where_the_spread_rules_out_a_difference_of_ten_percent():
     """The equivalence side of the spread rule: 4.23 (4.21, 4.25) against 4.29 (4.30, 4.28) lie 0.06 apart, the
-    standard error of the difference sqrt(0.0008 / 2 + 0.0002 / 2) = 0.0224: 0.105 with two of them, well within 10
-    % of 4.29; 4.0 / 4.7 against 4.0 / 4.6 are within their spread but not alike (0.05 + 2 x 0.46 > 0.435); one run
-    each tells nothing of likeness, and one run takes the other family's variance."""
+    standard error of the difference sqrt(0.0008 / 2 + 0.0002 / 2) = 0.0224: 0.148 with Student's t at 1.47
+    degrees of freedom (6.61), within 10 % of 4.29; 4.0 / 4.7 against 4.0 / 4.6 are within their spread but not
+    alike; one run each tells nothing of likeness, and one run takes the other family's variance (and its degrees
+    of freedom)."""
     from fvdem.study.mema2020 import _alike
-    assert _alike([4.21, 4.25], [4.30, 4.28]).startswith("alike: the means 4.23 and 4.29 differ by 0.06, with 2 "
-                                                         "standard errors at most 0.105")
+    assert _alike([4.21, 4.25], [4.30, 4.28]).startswith("alike: the means 4.23 and 4.29 differ by 0.06, with 6.61 "
+                                                         "standard errors at most 0.208")
     assert _alike([4.0, 4.7], [4.0, 4.6]) is None
     assert _alike([4.21], [4.30]) is None
-    assert _alike([4.2, 4.3], [4.25]) is not None  # sqrt(0.005 / 2 + 0.005): 0.05 + 0.173 < 0.43
+    # 4.25 against 4.2, 4.3, 4.2, 4.3 (variance 0.00333 both sides, df 3 each: 4.4 in all, t 2.76): 0 + 0.178 < 0.425;
+    # against two (df 1 each) not: t 5.5
+    assert _alike([4.2, 4.3] * 2, [4.25]).endswith("with 2.76 standard errors at most 0.178, within 10 % of the "
+                                                   "larger (0.425)")
+    assert _alike([4.2, 4.3], [4.25]) is None
     # more replicas of the same spread tell two values 3 % apart alike, where two each did not
     assert _alike([4.0, 4.3], [4.15, 4.45]) is None
     assert _alike([4.0, 4.3] * 4, [4.15, 4.45] * 4) is not None
@@ -782,36 +803,39 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert waits["verdict"] == "does not hold" and waits["values"]["difference at 2.9 Umf"] == pytest.approx(-1.76)
     assert waits["note"] == "bed at the outlet, particles pinned at the roof: ar4_mp at 2.9 Umf (4.7 % of the " \
                             "particles there at the end)"
-    # replicas shrink the noise: two of each at 2.0 and 2.9, 0.1 s apart (standard error of a difference 0.071 s),
-    # tell 0.36 s at 2.9 from 0.6 s at 2.0 (0.24 s apart, beyond 2 hypot(0.071, 0.071) = 0.2 s)
+    # replicas shrink the noise: two of each at 2.0 and 2.9, 0.1 s apart (standard error of a difference 0.071 s,
+    # 2 degrees of freedom each, 4 for the two: t 2.87), tell 0.26 s at 2.9 from 0.6 s at 2.0 (0.34 s apart, beyond
+    # 2.87 hypot(0.071, 0.071) = 0.29 s); 0.36 s (0.24 apart) would not be
     replicated = campaign[:2] + campaign[4:6] + [
         row("ar1", 2.0, 4.21), row("ar1", 2.0, 4.31), row("ar1", 2.9, 3.14), row("ar1", 2.9, 3.24),
-        row("ar4_mp", 2.0, 4.81), row("ar4_mp", 2.0, 4.91), row("ar4_mp", 2.9, 3.5), row("ar4_mp", 2.9, 3.6)]
+        row("ar4_mp", 2.0, 4.81), row("ar4_mp", 2.0, 4.91), row("ar4_mp", 2.9, 3.4), row("ar4_mp", 2.9, 3.5)]
     closer = found(replicated)["the AR-1/AR-4 difference shrinks at the highest velocity"]
-    assert closer["verdict"] == "holds" and closer["values"]["difference at 2.9 Umf"] == pytest.approx(-0.36)
+    assert closer["verdict"] == "holds" and closer["values"]["difference at 2.9 Umf"] == pytest.approx(-0.26)
+    nearer = replicated[:-2] + [row("ar4_mp", 2.9, 3.5), row("ar4_mp", 2.9, 3.6)]
+    assert found(nearer)["the AR-1/AR-4 difference shrinks at the highest velocity"]["verdict"] == "open"
     # sizes alike: AR-1 minus AR-4 MP 0.6 s at 2.0 against 0.5 s at 2.9 (each with a replicas' standard error of
-    # 0.0707 s), 0.1 s apart, with twice its noise (0.2 s) 0.3 s, within 10 % of the larger t95 (0.485 s): it did
-    # not shrink from 2.0 Umf, though it did from 1.6 and 1.7
+    # 0.0707 s), 0.1 s apart, with t times its noise (2.87 x 0.1 s) 0.387 s, within 10 % of the larger t95 (0.485
+    # s): it did not shrink from 2.0 Umf, though it did from 1.6 and 1.7
     same = campaign[:2] + campaign[4:6] + [
         row("ar1", 2.0, 4.2), row("ar1", 2.0, 4.3), row("ar1", 2.9, 3.1), row("ar1", 2.9, 3.2),
         row("ar4_mp", 2.0, 4.8), row("ar4_mp", 2.0, 4.9), row("ar4_mp", 2.9, 2.6), row("ar4_mp", 2.9, 2.7)]
     kept = found(same)["the AR-1/AR-4 difference shrinks at the highest velocity"]
     assert kept["verdict"] == "does not hold"
     assert kept["values"]["differences up to 2 Umf"]["2"] == (
-        "-0.6, alike in size: 0.6 s against 0.5 s at 2.9 Umf, with 2 standard errors (0.2 s) within 10 % of the "
+        "-0.6, alike in size: 0.6 s against 0.5 s at 2.9 Umf, with 2.87 standard errors (0.287 s) within 10 % of the "
         "larger t95 (0.485 s)")
     # within the noise with replicas: AR-1 minus AR-4 MP 0.55 s at 2.0 against 0.45 s at 2.9, the per-run
-    # variances summing to 0.165 s^2: likeness (0.1 s + 2 errors within 10 % of 4.955 s) needs an error of a
-    # size's difference below 0.198 s: 5 replicas of each would do (sqrt(0.165 / 5)), but the noisiest series
-    # take more and the quiet ones fewer: 6, 4, 2 and 4 replicas in all (variances 0.076, 0.042, 0.013 and 0.034
-    # over them: 0.038 <= 0.198^2 = 0.0391; one fewer anywhere misses it)
+    # variances summing to 0.165 s^2: likeness (0.1 s + t errors within 10 % of 4.955 s) needs t times the error
+    # of a size's difference below 0.396 s; the noisiest series take more and the quiet ones fewer: 7, 5, 3 and 4
+    # replicas in all (variances 0.076, 0.042, 0.013 and 0.034 over them: 0.0321 at 14.6 degrees of freedom, t
+    # 2.19: 0.154 <= 0.396^2 = 0.156; with 2 for t it was 6, 4, 2 and 4)
     spread = campaign[:1] + campaign[4:6] + [
         row("ar1", 2.0, 4.21), row("ar1", 2.0, 4.6), row("ar1", 2.9, 3.14), row("ar1", 2.9, 3.3),
         row("ar4_mp", 2.0, 4.81), row("ar4_mp", 2.0, 5.1), row("ar4_mp", 2.9, 2.64), row("ar4_mp", 2.9, 2.9)]
     plan = found(spread)["the AR-1/AR-4 difference shrinks at the highest velocity"]
     assert plan["verdict"] == "open" and "2 Umf: ar1 minus ar4_mp 0.55 s in size against 0.45 s at 2.9 Umf, within " \
-        "2 standard errors of their difference (0.574 s; about 6 of ar1 at 2 Umf, 4 of ar4_mp at 2 Umf, 2 of ar1 at " \
-        "2.9 Umf and 4 of ar4_mp at 2.9 Umf in all would tell (now 2, 2, 2 and 2), if the means and spread stay: " \
+        "3.27 standard errors of their difference (0.938 s; about 7 of ar1 at 2 Umf, 5 of ar4_mp at 2 Umf, 3 of ar1 " \
+        "at 2.9 Umf and 4 of ar4_mp at 2.9 Umf in all would tell (now 2, 2, 2 and 2), if the means and spread stay: " \
         "[[points]])" in plan["why"]
     # a bound that does not reach the size at the top by its noise tells nothing there: open (AR-1 at 19.5 against
     # AR-4 MP unmixed at 20: a size above 0.5 only, against 0.36 at 2.9)
@@ -834,21 +858,28 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert widen["verdict"] == "holds" and list(widen["values"]) == ["2.9"]  # 2.0 Umf is not above 2
     assert found(mp + [row("ar4_sp", 2.9, 2.9)])["MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] \
         == "open"
-    # with replicas, the difference of the means against twice its standard error decides: 2.85 against 2.8
-    # (0.05 within 0.224, and with it at most 0.274 apart, within 10 % of 2.85: alike, so MP is not faster),
-    # 2.85 against 2.8 from 3.0 and 2.6 (within 0.412, not alike: open), 2.825 against 2.975 (0.15 beyond 0.071:
-    # holds, though within 10 %), 2.825 against 2.65 (does not hold)
-    replicas = mp + [row("ar4_mp", 2.9, 2.9), row("ar4_sp", 2.9, 2.9), row("ar4_sp", 2.9, 2.7)]  # 2.85 against 2.8
+    # with replicas, the difference of the means against t times its standard error decides (four a side: df
+    # 4.4-6, t 2.5-2.8): 2.85 against 2.8 (0.05 within 0.178, and with it at most 0.228 apart, within 10 % of 2.85:
+    # alike, so MP is not faster), 2.85 against 2.8 from 3.0 and 2.6 (two a side, df 1.2: within 2.2, not alike:
+    # open), 2.825 against 2.975 (0.15 beyond t x 0.018: holds, though within 10 %), 2.825 against 2.65 (does not
+    # hold); two a side would tell none of them (df 1-2: t 4.5-7)
+    def at_29(family, times):
+        return [row(family, 2.9, t) for t in times]
+    replicas = mp + at_29("ar4_mp", (2.9, 2.8, 2.9)) + at_29("ar4_sp", (2.9, 2.7) * 2)  # 2.85 against 2.8
     alike = found(replicas)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]
-    assert alike["verdict"] == "does not hold" and alike["values"]["2.9"]["alike"].startswith("alike: the means 2.85")
-    replicas = mp + [row("ar4_mp", 2.9, 2.9), row("ar4_sp", 2.9, 3.0), row("ar4_sp", 2.9, 2.6)]
+    assert alike["verdict"] == "does not hold" and alike["values"]["2.9"]["alike"] == (
+        "alike: the means 2.85 and 2.8 differ by 0.05, with 2.76 standard errors at most 0.228, within 10 % of the "
+        "larger (0.285)")
+    assert found(mp + at_29("ar4_mp", (2.9,)) + at_29("ar4_sp", (2.9, 2.7)))[
+        "MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] == "open"
+    replicas = mp + at_29("ar4_mp", (2.9,)) + at_29("ar4_sp", (3.0, 2.6))
     overlapping = found(replicas)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]
     assert overlapping["verdict"] == "open"
-    assert "(ar4_mp against ar4_sp, t95 [s]: means 2.85 (2.8, 2.9) against 2.8 (3, 2.6), within 2 standard errors " \
-        "(0.412)" in overlapping["why"]
-    apart = mp + [row("ar4_mp", 2.9, 2.85), row("ar4_sp", 2.9, 2.95), row("ar4_sp", 2.9, 3.0)]
+    assert "(ar4_mp against ar4_sp, t95 [s]: means 2.85 (2.8, 2.9) against 2.8 (3, 2.6), within 10.7 standard errors " \
+        "(2.2)" in overlapping["why"]
+    apart = mp + at_29("ar4_mp", (2.85, 2.8, 2.85)) + at_29("ar4_sp", (2.95, 3.0) * 2)
     assert found(apart)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] == "holds"
-    behind = mp + [row("ar4_mp", 2.9, 2.85), row("ar4_sp", 2.9, 2.6), row("ar4_sp", 2.9, 2.7)]
+    behind = mp + at_29("ar4_mp", (2.85, 2.8, 2.85)) + at_29("ar4_sp", (2.6, 2.7) * 2)
     assert found(behind)["MP closures widen the AR-1/AR-4 difference above 2 Umf"]["verdict"] == "does not hold"
 
     # bed expansion: AR-4 MP higher at both velocities holds; a run stopped short is left out
@@ -862,20 +893,19 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     beds[1] = row("ar4_mp", 1.6, None, height=0.35)  # within 10 % of 0.34 without replicas
     assert "too noisy" in found(beds)["AR-4 beds expand more than AR-1 at the same U/Umf"]["why"]
     # a replica that erupted (the campaign's AR-4 MP at 1.6: 1.63 and 2.57 against AR-1's 1.73 and 1.75): the
-    # mean is above, by 0.36, within twice the standard error of the difference (0.94): open; four more replicas
-    # near 2.3 bring the error down (0.27) and decide
+    # mean is above, by 0.36, within t times the standard error of the difference (13.9 x 0.47 at 1.0 degrees of
+    # freedom): open; four more replicas near 2.3 bring the error down and decide
     erupted = [row("ar1", 1.6, None, height=1.73), row("ar1", 1.6, None, height=1.75),
                row("ar4_mp", 1.6, None, height=1.63), row("ar4_mp", 1.6, None, height=2.57)]
     spread = found(erupted)["AR-4 beds expand more than AR-1 at the same U/Umf"]
     assert spread["verdict"] == "open"
-    assert "(AR-4 MP against AR-1: means 2.1 (1.63, 2.57) against 1.74 (1.73, 1.75), within 2 standard errors " \
-        "(0.94)" in spread["why"]
-    # how many replicas would tell, if the means and the spread stay: the standard error sqrt((0.4418 + 0.0002) /
-    # n) below 0.36 / 2 (the order; likeness would need 0.21 - 0.36 < 0): n = 0.442 / 0.18^2 = 13.6, so 14
-    # how many would tell, if the means and the spread stay: the standard error sqrt(0.4418 / n_4 + 0.0002 / n_1)
-    # below 0.36 / 2 (the order; likeness would need 0.21 - 0.36 < 0): AR-1's spread is a 2,000th of AR-4 MP's, so
-    # AR-4 MP gets them, 0.4418 / 14 = 0.0316 + 0.0001 <= 0.18^2 = 0.0324 (with 13: 0.0341)
-    assert "about 14 of ar4_mp and 2 of ar1 in all would tell (now 2 and 2), if the means and spread stay: " \
+    assert "(AR-4 MP against AR-1: means 2.1 (1.63, 2.57) against 1.74 (1.73, 1.75), within 13.9 standard errors " \
+        "(6.55)" in spread["why"]
+    # how many would tell, if the means and the spread stay: t times the standard error sqrt(0.4418 / n_4 + 0.0002
+    # / n_1) below 0.36 (the order; likeness would need 0.21 - 0.36 < 0): AR-1's spread is a 2,000th of AR-4 MP's,
+    # so AR-4 MP gets them, 0.4418 / 17 + 0.0001 = 0.0261 <= (0.36 / 2.17)^2 = 0.0275 (t at df 16; with 16: 0.0277
+    # against 0.0273; with 2 for t it was 14)
+    assert "about 17 of ar4_mp and 2 of ar1 in all would tell (now 2 and 2), if the means and spread stay: " \
         "[[points]] of ar4_mp_expansion and ar1_expansion" in spread["why"]
     assert "core-hours" not in spread["why"]  # no run's cost known
     # the replicas cut short, with what they cost (AR-4 MP's 2,200 CPU s, AR-1's 1,000): the core-hours of the
@@ -889,8 +919,9 @@ def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expa
     assert "(now 3 and 3)" in costed["why"] and n > m  # AR-4 MP noisier and cheaper per variance cut
     assert f"; about {((n - 3) * 2200.0 + (m - 3) * 1000.0) / 3600.0:.3g} core-hours at their runs' cost so far" \
         in costed["why"]
-    # alike: 1.75 (1.72, 1.78) against 1.74 (1.73, 1.75), within 10 % with twice the error: not more
-    even = erupted[:2] + [row("ar4_mp", 1.6, None, height=h) for h in (1.72, 1.78)]
+    # alike: 1.75 (1.72, 1.78, twice) against 1.74 (1.73, 1.75, twice), within 10 % with t (3.0 at df 3.7) times the
+    # error: not more (two a side, df 1.2, t 9: open)
+    even = erupted[:2] * 2 + [row("ar4_mp", 1.6, None, height=h) for h in (1.72, 1.78) * 2]
     alike = found(even)["AR-4 beds expand more than AR-1 at the same U/Umf"]
     assert alike["verdict"] == "does not hold" and alike["values"]["1.6"]["alike"].startswith("alike: the means 1.75")
     more = erupted + [row("ar4_mp", 1.6, None, height=h) for h in (2.3, 2.4, 2.2, 2.35)]

@@ -263,13 +263,62 @@ def plot_void_fraction_panels(panels: dict, path, below=0.3):
 CLOSE = 0.10  # relative differences below this need replicas to be told from chaos
 
 
-SPREAD = 2.0  # with replicas, an order is told where the means differ by more than this many standard errors
+SPREAD = 2.0  # with many replicas, an order is told where the means differ by more than this many standard errors
+# with few, by more than Student's t at the same one-sided level (the normal distribution's at 2: 97.7 %) for the
+# Welch-Satterthwaite degrees of freedom of the difference (``_critical``): 4.53 with two replicas a side (df 2),
+# 2.87 with three (df 4), 2.15 with ten (df 18); a replica's spread is itself a guess (since the thirty-first session)
+TOLD = 0.977249868051821  # Phi(SPREAD)
+
+
+def _critical(df: float | None) -> float:
+    """How many standard errors tell a difference (``SPREAD`` for ``df`` None or infinite: no spread estimated
+    from the replicas, the ``CLOSE`` rule's error; else Student's t at ``TOLD`` for ``df`` degrees of freedom)."""
+    if df is None or not math.isfinite(df):
+        return SPREAD
+    from scipy.stats import t
+    return float(t.ppf(TOLD, max(df, 1.0)))
+
+
+def _satterthwaite(terms: list, dfs: list) -> float | None:
+    """The Welch-Satterthwaite degrees of freedom of a sum of variance terms (``terms``: each ``var / n``, with its
+    estimate's degrees of freedom in ``dfs``); None where every term is 0."""
+    total = sum(terms)
+    below = sum(t * t / d for t, d in zip(terms, dfs) if t > 0)
+    return total * total / below if below > 0 else None
+
+
+def _degrees(a: list, b: list) -> float | None:
+    """The degrees of freedom of ``_replica_error``'s difference (``_satterthwaite``): each family's variance with
+    ``n - 1``, a borrowed one (``_variances``: one run, or replicas all counted at one end) with its lender's; None
+    without a spread."""
+    var = _variances(a, b)
+    if var is None:
+        return None
+    own = [len(v) - 1 if len(v) > 1 and _sample_variance(v) > 0 else None for v in (a, b)]
+    dfs = [d if d else other for d, other in zip(own, reversed(own))]
+    return _satterthwaite([v / len(x) for v, x in zip(var, (a, b))], dfs)
+
+
+def _sample_variance(values: list) -> float:
+    mean = sum(values) / len(values)
+    return sum((x - mean) ** 2 for x in values) / (len(values) - 1)
+
+
+def _errors(k: float) -> str:
+    """``k`` standard errors as the findings say it: "2 standard errors", "4.53 standard errors"."""
+    return f"{k:.3g} standard errors"
+
+
+# the rules' words for the margin (``_critical``)
+MARGIN_WORDS = (f"Student's t at {100 * TOLD:.1f} % one-sided for the Welch-Satterthwaite degrees of freedom "
+                f"(4.53 with two replicas a side, {SPREAD:g} with many)")
 
 
 def _within_spread(a: list, b: list) -> str | None:
     """Whether two families' replica values at one velocity (a run not mixed by its end counted at its end) lie
-    within their spread, where either has replicas: the difference of the means within ``SPREAD`` standard
-    errors of it, ``sqrt(var_a / n_a + var_b / n_b)`` with each family's sample variance (a family of one run
+    within their spread, where either has replicas: the difference of the means within ``_critical`` standard
+    errors of it (Student's t for the difference's degrees of freedom, ``_degrees``; 2 for many replicas),
+    ``sqrt(var_a / n_a + var_b / n_b)`` with each family's sample variance (a family of one run
     takes the other's: the same chaos; so does a family whose variance is 0, its replicas all unmixed and
     counted at the same end, where the spread is unknown, not absent). More replicas shrink the error, so an
     order that exists is told in the end. Returns the means and the bound as text, or None where the difference
@@ -283,14 +332,15 @@ def _within_spread(a: list, b: list) -> str | None:
     error = _replica_error(a, b)
     if error is None:  # no spread known on either side: the CLOSE rule
         return None if _gap(*means) >= CLOSE else f"{told}, within {100 * CLOSE:.0f} % and no spread known"
-    if abs(means[0] - means[1]) > SPREAD * error:
+    k = _critical(_degrees(a, b))
+    if abs(means[0] - means[1]) > k * error:
         return None
-    return f"{told}, within {SPREAD:g} standard errors ({SPREAD * error:.3g})"
+    return f"{told}, within {_errors(k)} ({k * error:.3g})"
 
 
 def _alike(a: list, b: list, bounded: bool = False) -> str | None:
     """Whether two families' replica values at one velocity, whose order lies within their spread
-    (``_within_spread``), are alike: the difference of the means with ``SPREAD`` standard errors either side
+    (``_within_spread``), are alike: the difference of the means with ``_critical`` standard errors either side
     (``_replica_error``) within ``CLOSE`` of the larger mean, the difference a single run's chaos leaves
     untold (an equivalence test, two one-sided at about 98 % each). A claimed order then does not hold there:
     a difference of ``CLOSE`` or more is ruled out. Without a spread known, None: one run each tells nothing of
@@ -304,15 +354,16 @@ def _alike(a: list, b: list, bounded: bool = False) -> str | None:
         return None
     means = [sum(v) / len(v) for v in (a, b)]
     margin = CLOSE * max(means)
-    reach = (means[1] - means[0] if bounded else abs(means[0] - means[1])) + SPREAD * error
+    k = _critical(_degrees(a, b))
+    reach = (means[1] - means[0] if bounded else abs(means[0] - means[1])) + k * error
     if reach >= margin:
         return None
     within = f"within {100 * CLOSE:.0f} % of the larger ({margin:.3g})"
     if bounded:
         return (f"not below: the mean {means[0]:.3g}, a lower bound (runs not mixed by their end), against "
-                f"{means[1]:.3g}, which with {SPREAD:g} standard errors lies at most {reach:.3g} above it, {within}")
+                f"{means[1]:.3g}, which with {_errors(k)} lies at most {reach:.3g} above it, {within}")
     return (f"alike: the means {means[0]:.3g} and {means[1]:.3g} differ by {abs(means[0] - means[1]):.3g}, with "
-            f"{SPREAD:g} standard errors at most {reach:.3g}, {within}")
+            f"{_errors(k)} at most {reach:.3g}, {within}")
 
 
 def _variances(a: list, b: list) -> list | None:
@@ -345,26 +396,33 @@ MAX_PLANNED = 5000  # replicas: a difference that would take more is "more repli
 def _replicas_to_tell(series, difference: float, margin: float | None, bounded: bool = False) -> list | None:
     """How many replicas each series of runs would need in all (its runs so far and the ones to add) to tell a
     difference (of two means, or of two differences' sizes) either way if the means and the spread stay as they
-    are, at the least cost: the standard error ``sqrt(sum var_i / n_i)`` below ``|difference| / SPREAD`` (an
-    order told) or, with a ``margin`` (``_alike``: None where likeness is not told), below ``(margin -
-    |difference|) / SPREAD`` (alike), whichever is the larger. ``bounded``: the first mean is a lower bound at or
-    above the second (runs not mixed by their end, ``_alike(bounded=True)``), whose likeness is one-sided (the
-    second does not lie above it by ``margin``): below ``(margin + difference) / SPREAD`` then (the campaign's
-    AR-4 MP at 1.6 Umf, both unmixed at 20 s, against drag only's 19.4 and 15.5 s: 3 more runs, not 16).
+    are, at the least cost: the standard error ``sqrt(sum var_i / n_i)`` times ``_critical`` (at the plan's
+    degrees of freedom, each series' ``n_i - 1``) below ``|difference|`` (an order told) or, with a ``margin``
+    (``_alike``: None where likeness is not told), below ``margin - |difference|`` (alike), whichever is the
+    larger. ``bounded``: the first mean is a lower bound at or above the second (runs not mixed by their end,
+    ``_alike(bounded=True)``), whose likeness is one-sided (the second does not lie above it by ``margin``):
+    below ``margin + difference`` then (the campaign's
+    AR-4 MP at 1.6 Umf, both unmixed at 20 s, against drag only's 19.4 and 15.5 s: 6 more runs, not 19).
     ``series``: ``(runs so far, per-run variance, a replica's CPU seconds there or None)`` each; replicas are
     added one at a time where they cut the variance of the difference most per CPU second (per replica where a
     cost is unknown), which for these sums of ``var / n`` is the cheapest allocation: the noisy and the cheap
     series get the most. An estimate for planning ``[[points]]``: the next replicas move the means. None where
     no replica is missing, the difference is 0 and no margin applies, or more than ``MAX_PLANNED`` would be."""
     alike = 0.0 if margin is None else margin + difference if bounded else margin - abs(difference)
-    need = max(abs(difference), alike) / SPREAD
+    need = max(abs(difference), alike)
     if need <= 0:
         return None
     counts = [max(1, count) for count, _, _ in series]
     known = all(cost for _, _, cost in series)
     costs = [cost if known else 1.0 for _, _, cost in series]
     start = list(counts)
-    while sum(var / n for (_, var, _), n in zip(series, counts)) > need ** 2:
+
+    def short(counts):  # the margin (``_critical`` at the plan's degrees of freedom) times the error above ``need``
+        terms = [var / n for (_, var, _), n in zip(series, counts)]
+        k = _critical(_satterthwaite(terms, [max(n - 1, 1) for n in counts]))
+        return k * k * sum(terms) > need ** 2
+
+    while short(counts):
         if sum(counts) - sum(start) >= MAX_PLANNED:
             return None
         best = max(range(len(series)), key=lambda i: series[i][1] / (counts[i] * (counts[i] + 1)) / costs[i])
@@ -460,9 +518,9 @@ def _compare_binarity(rows) -> dict:
         else:
             told[v] = a > b
     rule = ("binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run; means of "
-            f"the replicas apart by more than {SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without "
-            f"replicas: too noisy); one velocity where AR-1's is told lower, or alike (within {100 * CLOSE:.0f} % "
-            f"with {SPREAD:g} standard errors), decides")
+            f"the replicas apart by more than t standard errors ({MARGIN_WORDS}; within {100 * CLOSE:.0f} % "
+            f"without replicas: too noisy); one velocity where AR-1's is told lower, or alike (within "
+            f"{100 * CLOSE:.0f} % with t standard errors), decides")
     return _at_every_velocity(claim, told, close, values, rule)
 
 
@@ -570,8 +628,8 @@ def _compare(rows, faster, slower, velocities, claim):
             why.append(untold)
             del faster_at[v]
     rule = ("mean t95 of the replicas, a run not mixed by its end counted at its end (a lower bound), apart by "
-            f"more than {SPREAD:g} standard errors; differences within {100 * CLOSE:.0f} % need replicas; alike (the "
-            f"difference with {SPREAD:g} standard errors within {100 * CLOSE:.0f} % of the larger mean t95) is not "
+            f"more than t standard errors ({MARGIN_WORDS}); differences within {100 * CLOSE:.0f} % need replicas; "
+            f"alike (the difference with t standard errors within {100 * CLOSE:.0f} % of the larger mean t95) is not "
             "faster; where neither mixed by the same end, the higher mean mixing entropy there mixes faster (Figs. 3, "
             "9 a)")
     return _at_every_velocity(claim, faster_at, why, values, rule)
@@ -716,12 +774,14 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
     counted = {f: _counted(rows, f) for f in (slow, fast)}
     error = {v: _difference_error(counted[slow][v], counted[fast][v]) for v in (top, *low)}
     var = {v: _variances(counted[slow][v], counted[fast][v]) for v in (top, *low)}  # None: no spread known
+    dfs = {v: _degrees(counted[slow][v], counted[fast][v]) or math.inf for v in (top, *low)}  # inf: the CLOSE rule
     gaps, told, untold = {}, {}, []
     for v in low:
         difference = a[v][0] - b[v][0]  # exact, or a lower (slow unmixed) or upper (fast unmixed) bound
         bound = difference if a[v][1] else -difference if b[v][1] else None  # a lower bound of the size, if > 0
         gaps[f"{v:g}"] = f"> {difference:.3g}" if a[v][1] else f"< {difference:.3g}" if b[v][1] else difference
-        noise = SPREAD * math.hypot(error[top], error[v])  # of the two sizes' difference
+        k = _critical(_satterthwaite([error[top] ** 2, error[v] ** 2], [dfs[top], dfs[v]]))
+        noise = k * math.hypot(error[top], error[v])  # of the two sizes' difference
         # alike (``_alike``): the sizes' difference with its noise within CLOSE of the larger t95, spreads known
         margin = CLOSE * max(a[v][0], b[v][0], a[top][0], b[top][0])
         spreads = var[top] is not None and var[v] is not None
@@ -730,7 +790,7 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
         elif bound is None and spreads and abs(abs(difference) - gap) + noise < margin:
             told[v] = False  # not smaller by what a single run's chaos leaves untold: it did not shrink
             gaps[f"{v:g}"] = (f"{difference:.3g}, alike in size: {abs(difference):.3g} s against {gap:.3g} s at "
-                              f"{top:g} Umf, with {SPREAD:g} standard errors ({noise:.3g} s) within "
+                              f"{top:g} Umf, with {_errors(k)} ({noise:.3g} s) within "
                               f"{100 * CLOSE:.0f} % of the larger t95 ({margin:.3g} s)")
         elif bound is None:
             series = [(f"{f} at {x:g} Umf", len(counted[f][x]), _replica_cost(rows, f, x))
@@ -739,19 +799,19 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
             plan = _replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, spreads_of)],
                                      abs(difference) - gap, margin) if spreads else None
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
-                          f"{top:g} Umf, within {SPREAD:g} standard errors of their difference ({noise:.3g} s; "
+                          f"{top:g} Umf, within {_errors(k)} of their difference ({noise:.3g} s; "
                           f"{_to_tell(plan, series)})")
         elif gap < bound - noise:
             told[v] = True
         else:
             untold.append(f"{v:g} Umf: {slow} minus {fast} only bounded ({gaps[f'{v:g}']} s), not past the "
-                          f"{gap:.3g} s at {top:g} Umf by {SPREAD:g} standard errors ({noise:.3g} s; run the unmixed "
+                          f"{gap:.3g} s at {top:g} Umf by {_errors(k)} ({noise:.3g} s; run the unmixed "
                           "longer: [[durations]])")
     values = {f"difference at {top:g} Umf": a[top][0] - b[top][0], "differences up to 2 Umf": gaps}
     rule = (f"t95 of {slow} minus {fast}: smaller in size at {top:g} Umf than at every velocity up to 2 Umf, by "
-            f"more than {SPREAD:g} standard errors of the two differences (from the replicas' spread; without "
-            f"replicas, {100 * CLOSE:.0f} % of the larger t95 for {SPREAD:g} errors); sizes alike (their difference "
-            f"with {SPREAD:g} errors within {100 * CLOSE:.0f} % of the larger t95, spreads known) did not shrink; "
+            f"more than t standard errors of the two differences ({MARGIN_WORDS}; from the replicas' spread; "
+            f"without replicas, {100 * CLOSE:.0f} % of the larger t95 for {SPREAD:g} errors); sizes alike (their "
+            f"difference with t errors within {100 * CLOSE:.0f} % of the larger t95, spreads known) did not shrink; "
             "where a run there did not mix, its bound decides only where it exceeds that size so")
     return _at_every_velocity(claim, told, untold, values, rule)
 
@@ -827,8 +887,8 @@ def _expansion(rows) -> dict:
             told[v] = ma > mb
     rule = (f"mean bed expansion (bed_top from {WINDOW_START:g} s after the inlet ramp for {WINDOW:g} s, over "
             f"its settled value) of AR-4 MP above AR-1's at every velocity both ran, the means apart by more than "
-            f"{SPREAD:g} standard errors (within {100 * CLOSE:.0f} % without replicas: too noisy); one velocity "
-            f"where AR-4 MP's is told lower, or alike (within {100 * CLOSE:.0f} % with {SPREAD:g} standard errors), "
+            f"t standard errors ({MARGIN_WORDS}; within {100 * CLOSE:.0f} % without replicas: too noisy); one "
+            f"velocity where AR-4 MP's is told lower, or alike (within {100 * CLOSE:.0f} % with t standard errors), "
             "decides; a bed whose top stood at the outlet for half the window or more is left out (its height is the "
             f"outlet's); the runs of a family \"<family>{EXPANSION}\" (<family>'s case from other beds, cut short "
             "after the window) count as <family>'s")
@@ -862,8 +922,9 @@ def plot_expansion(measured: list, roofed: list, path) -> Path:
     """Bed expansion against U/Umf, AR-1 against AR-4 MP, as the finding counts it (``_expansion``; §5.1, where
     the paper shows it in its snapshots, Figs. 5-6): the bed's top over the window (``_bed_expansion``) over
     the settled bed's. Each run is a marker (hollow: a run of a "<family>_expansion" family, cut short after the
-    window), the line joins the means of the replicas at each U/Umf, with twice their standard error as a bar
-    (the finding's measure of the spread, ``SPREAD``); a run left out for its bed top at the outlet is a cross."""
+    window), the line joins the means of the replicas at each U/Umf, with the standard error of each mean times
+    Student's t (``_critical`` for ``n - 1`` degrees of freedom) as a bar; a run left out for its bed top at the
+    outlet is a cross."""
     import numpy as np
 
     from ..analysis.plots import _pyplot, _save
@@ -880,9 +941,10 @@ def plot_expansion(measured: list, roofed: list, path) -> Path:
         ratios = sorted(by)
         values = [[float(r["bed_expansion"]) for r in by[v]] for v in ratios]
         means = [float(np.mean(x)) for x in values]
-        bars = [SPREAD * float(np.std(x, ddof=1)) / len(x) ** 0.5 if len(x) > 1 else 0.0 for x in values]
+        bars = [_critical(len(x) - 1) * float(np.std(x, ddof=1)) / len(x) ** 0.5 if len(x) > 1 else 0.0
+                for x in values]
         line = ax.errorbar(ratios, means, yerr=bars, capsize=3, lw=1.5,
-                           label=f"{label} (runs; the line: mean, bar: {SPREAD:g} standard errors)")
+                           label=f"{label} (runs; the line: mean, bar: t standard errors, t at {100 * TOLD:.1f} %)")
         colour = line[0].get_color()
         for v in ratios:
             offsets = (np.arange(len(by[v])) - (len(by[v]) - 1) / 2) * 0.012
