@@ -340,6 +340,9 @@ def test_how_many_replicas_would_tell_comes_with_their_core_hours():
     assert _replica_cost(rows, "ar1", 1.6) == 2000.0  # the run on its way left out
     assert _replica_cost(rows, "ar4_mp", 1.6, "ar4_mp_expansion") == 7200.0  # the runs cut short alone
     assert _replica_cost(rows, "ar4_mp", 1.6) == (7200.0 + 72000.0) / 2 and _replica_cost(rows, "ar4_sp", 1.6) is None
+    # where runs ended when they mixed ("<family>_t95", ``cut_at_t95``), the replicas to add are of those
+    rows.append(run("ar1", 2.0, 6000.0, column="ar1_t95", cut_at_t95=True))
+    assert _replica_cost(rows, "ar1", 2.0) == 6000.0 and _replica_cost(rows, "ar1", 1.6) == 2000.0
     # 14 of each: AR-1 has 4 (10 more at 2000 s), AR-4 MP 3 (11 more at 7200 s): 27.6 core-hours
     series = [("ar1", 4, 2000.0), ("ar4_mp", 3, 7200.0)]
     assert _to_tell([14, 14], series) == (

@@ -454,9 +454,12 @@ def _and(items: list) -> str:
 def _replica_cost(rows, family: str, v, column: str | None = None) -> float | None:
     """A replica's CPU seconds at a point so far: the mean ``cpu_seconds`` of the runs of ``family`` at U/Umf ``v``
     that reached their end (of those whose own family, ``column``, is ``column`` alone where given: the runs cut
-    short of ``_expansion_runs``); None without one."""
-    cpu = [r["cpu_seconds"] for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v
-           and r["status"] in ENDED and r.get("cpu_seconds") and (column is None or r.get("column") == column)]
+    short of ``_expansion_runs``; without it, of the runs that ended when they mixed alone where the point has some,
+    ``_t95_runs``: the replicas a t95 finding's plan adds are of those); None without one."""
+    ended = [r for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v and r["status"] in ENDED
+             and r.get("cpu_seconds") and (column is None or r.get("column") == column)]
+    cut = [r for r in ended if r.get("cut_at_t95")]
+    cpu = [r["cpu_seconds"] for r in (cut if column is None and cut else ended)]
     return sum(cpu) / len(cpu) if cpu else None
 
 
