@@ -309,9 +309,10 @@ def _errors(k: float) -> str:
     return f"{k:.3g} standard errors"
 
 
-# the rules' words for the margin (``_critical``)
-MARGIN_WORDS = (f"Student's t at {100 * TOLD:.1f} % one-sided for the Welch-Satterthwaite degrees of freedom "
-                f"(4.53 with two replicas a side, {SPREAD:g} with many)")
+def _margin_words() -> str:
+    """The rules' words for the margin (``_critical``)."""
+    return (f"Student's t at {100 * TOLD:.1f} % one-sided for the Welch-Satterthwaite degrees of freedom "
+            f"({_critical(2):.3g} with two replicas a side, {SPREAD:g} with many)")
 
 
 def _within_spread(a: list, b: list) -> str | None:
@@ -401,8 +402,8 @@ def _replicas_to_tell(series, difference: float, margin: float | None, bounded: 
     (``_alike``: None where likeness is not told), below ``margin - |difference|`` (alike), whichever is the
     larger. ``bounded``: the first mean is a lower bound at or above the second (runs not mixed by their end,
     ``_alike(bounded=True)``), whose likeness is one-sided (the second does not lie above it by ``margin``):
-    below ``margin + difference`` then (the campaign's
-    AR-4 MP at 1.6 Umf, both unmixed at 20 s, against drag only's 19.4 and 15.5 s: 6 more runs, not 19).
+    below ``margin + difference`` then (the campaign's AR-4 MP at 1.6 Umf, both unmixed at 20 s, against drag
+    only's 19.4 and 15.5 s: 6 more runs, not 19).
     ``series``: ``(runs so far, per-run variance, a replica's CPU seconds there or None)`` each; replicas are
     added one at a time where they cut the variance of the difference most per CPU second (per replica where a
     cost is unknown), which for these sums of ``var / n`` is the cheapest allocation: the noisy and the cheap
@@ -521,7 +522,7 @@ def _compare_binarity(rows) -> dict:
         else:
             told[v] = a > b
     rule = ("binarity var / ((mean - packed)(1 - mean)) of the cells below 0.3 m, second half of the run; means of "
-            f"the replicas apart by more than t standard errors ({MARGIN_WORDS}; within {100 * CLOSE:.0f} % "
+            f"the replicas apart by more than t standard errors ({_margin_words()}; within {100 * CLOSE:.0f} % "
             f"without replicas: too noisy); one velocity where AR-1's is told lower, or alike (within "
             f"{100 * CLOSE:.0f} % with t standard errors), decides")
     return _at_every_velocity(claim, told, close, values, rule)
@@ -631,7 +632,7 @@ def _compare(rows, faster, slower, velocities, claim):
             why.append(untold)
             del faster_at[v]
     rule = ("mean t95 of the replicas, a run not mixed by its end counted at its end (a lower bound), apart by "
-            f"more than t standard errors ({MARGIN_WORDS}); differences within {100 * CLOSE:.0f} % need replicas; "
+            f"more than t standard errors ({_margin_words()}); differences within {100 * CLOSE:.0f} % need replicas; "
             f"alike (the difference with t standard errors within {100 * CLOSE:.0f} % of the larger mean t95) is not "
             "faster; where neither mixed by the same end, the higher mean mixing entropy there mixes faster (Figs. 3, "
             "9 a)")
@@ -812,7 +813,7 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
                           "longer: [[durations]])")
     values = {f"difference at {top:g} Umf": a[top][0] - b[top][0], "differences up to 2 Umf": gaps}
     rule = (f"t95 of {slow} minus {fast}: smaller in size at {top:g} Umf than at every velocity up to 2 Umf, by "
-            f"more than t standard errors of the two differences ({MARGIN_WORDS}; from the replicas' spread; "
+            f"more than t standard errors of the two differences ({_margin_words()}; from the replicas' spread; "
             f"without replicas, {100 * CLOSE:.0f} % of the larger t95 for {SPREAD:g} errors); sizes alike (their "
             f"difference with t errors within {100 * CLOSE:.0f} % of the larger t95, spreads known) did not shrink; "
             "where a run there did not mix, its bound decides only where it exceeds that size so")
@@ -841,7 +842,7 @@ def _t95_runs(rows) -> list:
     taller column's run, ``_tall_columns``). Such a family runs <name>'s case from beds of its own (other
     insertion seeds) and ends when it mixes (``time.stop_after_mixed = 0``: t95 is the entropy's first crossing
     of 0.95, ``mixing_time``, so it is the same as a whole run's), or unmixed at its duration: the replicas the
-    t95 findings need by the score at 2 and 2.9 Umf (the differences' sizes), a quarter to two fifths cheaper
+    t95 findings need by the dozen at 2 and 2.9 Umf (the differences' sizes), a quarter to two fifths cheaper
     than runs that go on 2 s past t95. They count for the t95 findings and Fig. 4 alone: their void fractions
     (over the second half of a run) and bed expansion (over a window they may not reach) are of other times
     than a whole run's."""
@@ -890,7 +891,7 @@ def _expansion(rows) -> dict:
             told[v] = ma > mb
     rule = (f"mean bed expansion (bed_top from {WINDOW_START:g} s after the inlet ramp for {WINDOW:g} s, over "
             f"its settled value) of AR-4 MP above AR-1's at every velocity both ran, the means apart by more than "
-            f"t standard errors ({MARGIN_WORDS}; within {100 * CLOSE:.0f} % without replicas: too noisy); one "
+            f"t standard errors ({_margin_words()}; within {100 * CLOSE:.0f} % without replicas: too noisy); one "
             f"velocity where AR-4 MP's is told lower, or alike (within {100 * CLOSE:.0f} % with t standard errors), "
             "decides; a bed whose top stood at the outlet for half the window or more is left out (its height is the "
             f"outlet's); the runs of a family \"<family>{EXPANSION}\" (<family>'s case from other beds, cut short "
