@@ -1811,9 +1811,9 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     # and, for the bed expansion at 1.6 and 1.7 Umf alone, AR-1 and AR-4 MP cut short after its window (5 s) from
     # beds of their own: two replicas of AR-1, four of AR-4 MP (the campaign's spreads: 0.01-0.09 and 0.45-0.66),
     # at 1.7 twelve of AR-1 and eighteen of AR-4 MP; and the findings' plans at least cost: at 1.6 Umf AR-4 MP and
-    # MP drag only to five, at 2.0 AR-4 MP to three and drag only to five, AR-4 MP at 2.9 in the tall column, AR-1 at
-    # 2.3 and at 2.9 in the tall column to three
-    assert len(study.runs) == 102 and {r.replica for r in study.runs} == set(range(1, 19))
+    # MP drag only to five, at 2.0 AR-4 MP to three and drag only to five, AR-4 MP and MP drag only at 2.9 in the
+    # tall column, AR-1 at 2.3 and at 2.9 in the tall column to three
+    assert len(study.runs) == 103 and {r.replica for r in study.runs} == set(range(1, 19))
     short = {r.name: (r.duration, r.bed) for r in study.runs if "expansion" in r.name}
     assert short == {f"ar{f}_expansion_u_over_umf{v}_r{k}": (5.0, f"ar{f[0]}_expansion" + (f"_r{k}" if k > 1 else ""))
                      for f, n in (("1", {1.6: 2, 1.7: 12}), ("4_mp", {1.6: 4, 1.7: 18})) for v in (1.6, 1.7)
@@ -1821,14 +1821,15 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     assert sorted((r.name, r.bed) for r in study.runs if r.replica > 2 and "expansion" not in r.name) == sorted(
         [(f"ar4_mp{drag}_u_over_umf{v}_r{k}", f"ar4_r{k}") for drag in ("", "_drag") for v in ("1.6", "2")
          for k in range(3, 6) if drag or v == "1.6" or k == 3]
-        + [("ar4_mp_tall_u_over_umf2.9_r3", "ar4_r3"), ("ar1_u_over_umf2.3_r3", "ar1_r3"),
+        + [("ar4_mp_tall_u_over_umf2.9_r3", "ar4_r3"), ("ar4_mp_drag_tall_u_over_umf2.9_r3", "ar4_r3"),
+           ("ar1_u_over_umf2.3_r3", "ar1_r3"),
            ("ar1_tall_u_over_umf2.9_r3", "ar1_r3")])
     assert {r.name for r in study.runs if "tall" in r.name} == {
         f"ar{point}_r{k}" for point in ("4_mp_tall_u_over_umf2.9", "4_mp_drag_tall_u_over_umf2.9",
                                         "4_sp_tall_u_over_umf2.3", "4_sp_tall_u_over_umf2.6",
                                         "4_sp_tall_u_over_umf2.9",
                                         "1_tall_u_over_umf2.6", "1_tall_u_over_umf2.9") for k in (1, 2)} | {
-        "ar4_mp_tall_u_over_umf2.9_r3", "ar1_tall_u_over_umf2.9_r3"}
+        "ar4_mp_tall_u_over_umf2.9_r3", "ar4_mp_drag_tall_u_over_umf2.9_r3", "ar1_tall_u_over_umf2.9_r3"}
     first = [_priority(r) for r in study.runs if r.replica == 1]
     second = [_priority(r) for r in study.runs if r.replica == 2]
     third = [_priority(r) for r in study.runs if r.replica == 3]
@@ -2095,7 +2096,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     queue = _Queue(study.runs, 2)
     ended, first = queue.take(0)
     assert ended == [] and [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s
-    assert queue.take(2) == ([], []) and len(queue) == 100
+    assert queue.take(2) == ([], []) and len(queue) == 101
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
@@ -2104,7 +2105,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 98
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 99
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
