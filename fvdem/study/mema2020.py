@@ -315,6 +315,13 @@ def _margin_words() -> str:
             f"({_critical(2):.3g} with two replicas a side, {SPREAD:g} with many)")
 
 
+def _margin(a: list, b: list) -> tuple[float, float] | None:
+    """The standard error of the difference of two families' means (``_replica_error``) and how many of it tell a
+    difference (``_critical`` for its degrees of freedom, ``_degrees``); None without a spread."""
+    error = _replica_error(a, b)
+    return None if error is None else (error, _critical(_degrees(a, b)))
+
+
 def _within_spread(a: list, b: list) -> str | None:
     """Whether two families' replica values at one velocity (a run not mixed by its end counted at its end) lie
     within their spread, where either has replicas: the difference of the means within ``_critical`` standard
@@ -330,10 +337,10 @@ def _within_spread(a: list, b: list) -> str | None:
     means = [sum(v) / len(v) for v in (a, b)]
     told = (f"means {means[0]:.3g} ({', '.join(f'{x:.3g}' for x in a)}) against {means[1]:.3g} "
             f"({', '.join(f'{x:.3g}' for x in b)})")
-    error = _replica_error(a, b)
-    if error is None:  # no spread known on either side: the CLOSE rule
+    margin = _margin(a, b)
+    if margin is None:  # no spread known on either side: the CLOSE rule
         return None if _gap(*means) >= CLOSE else f"{told}, within {100 * CLOSE:.0f} % and no spread known"
-    k = _critical(_degrees(a, b))
+    error, k = margin
     if abs(means[0] - means[1]) > k * error:
         return None
     return f"{told}, within {_errors(k)} ({k * error:.3g})"
@@ -350,12 +357,12 @@ def _alike(a: list, b: list, bounded: bool = False) -> str | None:
     their end (not mixed by then), its mean a lower bound at or above ``b``'s: its true mean may lie anywhere above,
     so only one side is told, that ``b``'s mean lies at most ``CLOSE`` above it (``a`` does not lie below ``b`` by as
     much: against a claim that ``a`` is the lower, as decisive as alike). Returns the numbers as text, or None."""
-    error = _replica_error(a, b)
-    if error is None:
+    spread = _margin(a, b)
+    if spread is None:
         return None
+    error, k = spread
     means = [sum(v) / len(v) for v in (a, b)]
     margin = CLOSE * max(means)
-    k = _critical(_degrees(a, b))
     reach = (means[1] - means[0] if bounded else abs(means[0] - means[1])) + k * error
     if reach >= margin:
         return None
@@ -371,8 +378,7 @@ def _variances(a: list, b: list) -> list | None:
     """The sample variances of two families' replica values at one velocity, a family of one run, or of replicas
     all counted at one end (variance 0: its spread unknown, not absent), taking the other's (the same chaos);
     None where neither has one."""
-    means = [sum(v) / len(v) for v in (a, b)]
-    var = [sum((x - m) ** 2 for x in v) / (len(v) - 1) if len(v) > 1 else None for v, m in zip((a, b), means)]
+    var = [_sample_variance(v) if len(v) > 1 else None for v in (a, b)]
     var = [x if x else y for x, y in zip(var, reversed(var))]
     return var if all(var) else None
 
@@ -913,7 +919,7 @@ def _table_figures(out: Path, rows: list) -> list:
     """Figures of the table's values, counted as the findings count them (``check_findings``: the runs that
     mixed or ended, a taller column's in place of the paper's column's at their point): the bed expansion
     against U/Umf, AR-1 against AR-4 MP (``bed_expansion.png``, ``plot_expansion``)."""
-    counted = _tall_columns([r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS])[0]
+    counted = _tall_columns(_told_rows(rows))[0]
     measured, roofed = _expansion_sample(_expansion_runs(counted))
     families = ("ar1", "ar4_mp")
     if not any(r["family"] in families for r in measured):
@@ -1074,6 +1080,12 @@ def _shares(shares: list, where: str = "there at the end") -> str:
     return f" ({', '.join(known)} % of the particles {where})" if known else ""
 
 
+def _told_rows(rows) -> list:
+    """The rows the findings count: a run that has mixed, or is no longer on its way (a run still running and
+    not yet mixed, or not started, is left out, not taken as unmixed)."""
+    return [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
+
+
 def check_findings(rows) -> list:
     """Each finding of Mema et al. (2020) (§5-§6), with fvdem's numbers and one word: holds, does not hold, or
     open (and why: runs missing, too short to mix, or differences within the noise without replicas).
@@ -1088,7 +1100,7 @@ def check_findings(rows) -> list:
     (``_t95_runs``), not in the bed expansion's nor the void fractions'."""
     whole = [r for r in rows if not r["family"].endswith(T95_ONLY)]  # the expansion's and the void fractions'
     rows = _t95_runs(rows)
-    planned, rows = rows, [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
+    planned, rows = rows, _told_rows(rows)
     planned = _tall_columns(planned)[0]  # a taller column's runs in place of the paper's column's at their points
     rows, aside = _tall_columns(rows)
 
@@ -1143,7 +1155,7 @@ def check_findings(rows) -> list:
             mine.append({"finding": change, "verdict": "holds" if spread < 0.2 else "does not hold",
                          "values": means, "rule": "spread below 20 %"})
         findings += [noted(f, (family,)) for f in mine]
-    whole = _tall_columns([r for r in whole if r.get("t95") is not None or r["status"] not in IN_PROGRESS])[0]
+    whole = _tall_columns(_told_rows(whole))[0]
     findings.append(_expansion(whole))
     findings.append(_compare_binarity(whole))
     if any(r["family"] == "ar1_paper" for r in rows):  # fvdem's own check, where a study runs that family

@@ -486,16 +486,19 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
     names = [r.name for r in study.runs]
     planned = set(names) | {r.name for r in study.left_out}
 
+    def unflagged(entry):  # an entry without its "planned" flag (a run the file plans, again)
+        return {k: v for k, v in entry.items() if k != "planned"}
+
     def listed(run, result=None):  # the run's latest result (else pending) with what the study file says of it
-        kept = {k: v for k, v in (result or _pending(run)).items() if k != "planned"}  # (planned again)
-        return {**kept, "replica": run.replica, "duration": run.duration, "physics": run.physics}
+        return {**unflagged(result or _pending(run)), "replica": run.replica, "duration": run.duration,
+                "physics": run.physics}
 
     # the index keeps the runs ``--only`` left out, and a run the study file no longer plans while its folder
     # holds something (nothing on disk goes unlisted), flagged ``"planned": false`` (``--status`` and the report
     # neither count nor wait for it where it has not ended; ``--supersede`` moves its folder aside); one it no
     # longer plans that never started (a replica or point taken out of the file) leaves it
     runs = ([listed(r, latest.get(r.name)) for r in study.runs]
-            + [{**{k: v for k, v in r.items() if k != "planned"}, **({} if n in planned else {"planned": False})}
+            + [unflagged(r) if n in planned else {**r, "planned": False}
                for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))]
             + [listed(r) for r in study.left_out if r.name not in latest])
     index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
