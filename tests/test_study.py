@@ -1081,6 +1081,49 @@ def test_points_tables_add_replicas_where_two_lie_within_their_spread_and_leave_
         ('"gas.u_over_umf" = 2.0\nreplica = 2', "points[0].replica", "did you mean")))
 
 
+def test_a_lower_priority_tranche_starts_only_once_the_runs_queued_before_it_have_started(tmp_path):
+    """``priority`` (a family's, or a [[points]] table's): a run of a lower tier is handed on only once every
+    run of the tiers above has been, whatever its replica and even where it fits a deadline and they do not;
+    a run in progress counts in the top tier. Without priorities the order is the replicas' (a new family's
+    first replica before an earlier family's second). A wrong priority is refused by key."""
+    from fvdem.study.runner import _Queue
+    text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
+    text = text.replace('bed = "small"', 'bed = "small"\nreplicas = 2', 1)
+    text = text.replace("[axes]", f'[families.late]\ncase = "{ROOT / "cases" / "demo.toml"}"\nbed = "small"\n'
+                        'set = {"particles.count" = 150}\n\n[axes]')
+    path = tmp_path / "study.toml"
+    path.write_text(text)
+    plain = load_study(path, tmp_path / "out")
+    assert {r.priority for r in plain.runs} == {0}
+    first = [r.name for r in _Queue(plain.runs, 6).take(0)[1]]
+    assert first.index("late_u_over_umf2") < first.index("ar1_u_over_umf2_r2")  # replicas first, without tiers
+    path.write_text(text + '\n[[points]]\nfamily = "late"\npriority = -1\n')
+    study = load_study(path, tmp_path / "out")
+    tiers = {r.name: r.priority for r in study.runs}
+    assert tiers == {"ar1_u_over_umf2_r1": 0, "ar1_u_over_umf2.9_r1": 0, "ar1_u_over_umf2_r2": 0,
+                     "ar1_u_over_umf2.9_r2": 0, "late_u_over_umf2": -1, "late_u_over_umf2.9": -1}
+    queue = _Queue(study.runs, 6, fits=lambda runs: {"late_u_over_umf2", "late_u_over_umf2.9"})
+    taken = [r.name for r in queue.take(0)[1]]
+    assert set(taken[:4]) == {n for n, t in tiers.items() if t == 0} and set(taken[4:]) == {
+        "late_u_over_umf2", "late_u_over_umf2.9"}  # though only the late ones fit
+    queue = _Queue(study.runs, 1)
+    begun = next(r for r in study.runs if r.name == "late_u_over_umf2.9")
+    Path(begun.folder).mkdir(parents=True)
+    (Path(begun.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.01, "stopped_early": True}))
+    assert [r.name for r in queue.take(0)[1]] == ["late_u_over_umf2.9"]  # in progress: the top tier
+    assert [r.name for r in queue.take(0)[1]][0].startswith("ar1_")
+    path.write_text(text.replace('bed = "small"\nreplicas = 2', 'bed = "small"\nreplicas = 2\npriority = 3', 1))
+    assert {r.priority for r in load_study(path, tmp_path / "out").runs if r.family == "ar1"} == {3}
+    path.write_text(text.replace('bed = "small"\nreplicas = 2', 'bed = "small"\nreplicas = 2\npriority = "low"', 1))
+    with pytest.raises(CaseError) as err:
+        load_study(path, tmp_path / "out")
+    assert "families.ar1.priority = 'low': an integer -1000-1000" in str(err.value)
+    _refused_tables(path, text, "points", (
+        ('family = "late"\npriority = 2000', "points[0].priority", "2000"),
+        ('family = "late"\npriority = true', "points[0].priority", "True"),
+        ('family = "late"\npriorty = -1', "points[0].priorty", "did you mean 'priority'")))
+
+
 def test_exclude_tables_leave_out_the_runs_they_match_and_a_wrong_one_is_refused(tmp_path):
     """[[exclude]]: family and axis values, each one value or a list (as [[durations]] and [[points]]); a misspelt
     key or a value the study lacks would leave out nothing, silently, and an empty table every run: refused."""

@@ -177,11 +177,16 @@ class _Queue:
     to the worker that settled their bed, so a worker could begin a new run while a run in progress waited
     behind the other (2026-12-03). With ``fits`` (runs -> the names of those expected to end in the time left:
     ``_fitting``, the study's ``until``) the runs that fit go first, in ``_priority`` order among themselves, then
-    the others: a slot is never left idle, and a run that cannot end stops at its checkpoint at the deadline."""
+    the others: a slot is never left idle, and a run that cannot end stops at its checkpoint at the deadline.
+    Above both, the runs' ``priority`` (the study file's, of a family or ``[[points]]``): a tier below another
+    starts only once that one's runs have all started (a later tranche waits for the runs queued before it,
+    even where it fits and they do not); a run in progress counts in the top tier, so that without priorities
+    the order is as before."""
 
     def __init__(self, runs, slots, fits=None):
         self.runs, self.slots = list(runs), slots  # slots: a number, or a callable (the live cluster's size)
         self.fits = fits
+        self.top = max((r.priority for r in self.runs), default=0)
 
     def __len__(self) -> int:
         return len(self.runs)
@@ -197,7 +202,10 @@ class _Queue:
         if free <= 0 or not self.runs:
             return ended, []
         fitting = self.fits(self.runs) if self.fits else set()
-        self.runs.sort(key=lambda r: (r.name in fitting, standing[r.name][1]), reverse=True)
+
+        def tier(run):  # a run in progress (ranked above every replica's runs not started) is in the top tier
+            return self.top if standing[run.name][1] > IN_PROGRESS_RANK - REPLICA_RANK else run.priority
+        self.runs.sort(key=lambda r: (tier(r), r.name in fitting, standing[r.name][1]), reverse=True)
         taken, self.runs = self.runs[:free], self.runs[free:]
         return ended, taken
 

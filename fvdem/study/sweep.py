@@ -36,6 +36,7 @@ class RunSpec:
     replica: int = 1  # 1, 2, ...: replica k >= 2 starts from its own bed (insertion seed + k - 1)
     report: str = DEFAULT_REPORT  # the study's report: which values of its summary the run's result carries
     physics: str = ""  # its case's physics_fingerprint (its bed's state aside): tells a folder of an older case
+    priority: int = 0  # the queue's tier among runs not started, higher first (``priority`` of its family or point)
 
 
 @dataclass(frozen=True)
@@ -106,7 +107,7 @@ def study_from_table(table: dict, path, out) -> Study:
         if not isinstance(spec["case"], str) or not spec["case"].strip():
             _problem(problems, f"{kind}.{key}.case", spec["case"], "the path of a case file (a string)")
             return None, {}
-        allowed = {"case", "set"} | ({"bed", "duration", "replicas"} if kind == "families" else set())
+        allowed = {"case", "set"} | ({"bed", "duration", "replicas", "priority"} if kind == "families" else set())
         for k in sorted(set(spec) - allowed):
             _problem(problems, f"{kind}.{key}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
                      + ", ".join(sorted(allowed)))
@@ -149,9 +150,11 @@ def study_from_table(table: dict, path, out) -> Study:
         return replica_beds[(bed_name, replica)]
 
     exclusions = _exclusions(table.get("exclude", []), families, axes, problems)
-    # [[durations]] (duration) and [[points]] (duration, replicas): the last table that matches a run decides
+    # [[durations]] (duration) and [[points]] (duration, replicas, priority): the last table that matches a run
+    # decides
     chosen = (_point_tables(table.get("durations", []), "durations", ("duration",), families, axes, problems)
-              + _point_tables(table.get("points", []), "points", ("duration", "replicas"), families, axes, problems))
+              + _point_tables(table.get("points", []), "points", ("duration", "replicas", "priority"), families, axes,
+                              problems))
     runs = []
     names = list(axes)
     for family, spec in families.items():
@@ -168,16 +171,18 @@ def study_from_table(table: dict, path, out) -> Study:
         if bed is not None and bed not in bed_names:
             _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
         family_replicas = _replicas(spec, f"families.{family}.replicas", replicas, problems)
+        family_priority = _priority_of(spec, f"families.{family}.priority", problems)
         for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
             point = dict(zip(names, values))
             if any(excluded(family, point) for excluded in exclusions):
                 continue
             run_duration = float(family_duration) if isinstance(family_duration, (int, float)) else 0.0
-            point_replicas = family_replicas
+            point_replicas, point_priority = family_replicas, family_priority
             for match, values in chosen:
                 if match(family, point):
                     run_duration = values.get("duration", run_duration)
                     point_replicas = values.get("replicas", point_replicas)
+                    point_priority = values.get("priority", point_priority)
             for replica in range(1, point_replicas + 1):
                 label = "_".join(f"{k.split('.')[-1]}{v:g}" if isinstance(v, (int, float)) else f"{k.split('.')[-1]}{v}"
                                  for k, v in point.items())
@@ -190,7 +195,7 @@ def study_from_table(table: dict, path, out) -> Study:
                     overrides["particles.insertion.seed"] = replica
                 runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name),
                                     replica_bed(bed, replica) if bed is not None else None, point, run_duration,
-                                    replica, report))
+                                    replica, report, priority=point_priority))
     _check_names(runs, beds, problems)
     cluster = _table(table, "cluster", problems)
     check_cluster(cluster, problems)
@@ -218,7 +223,8 @@ def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, pr
     """The ``[[durations]]`` or ``[[points]]`` tables (``name``) as ``(match(family, point), {key: value})``: each
     gives the runs that match all its selectors (``family`` and axis keys, each a value or a list of values)
     its values of ``keys``: ``duration`` (simulated seconds, e.g. the slow-mixing low velocities of a study run
-    longer) and, in ``[[points]]``, ``replicas`` (e.g. a third replica where two lie within their spread). A
+    longer) and, in ``[[points]]``, ``replicas`` (e.g. a third replica where two lie within their spread) and
+    ``priority`` (the queue's tier of those runs while not started, higher first: a later tranche at -1). A
     key that is neither a selector nor one of ``keys``, a family or axis value the study lacks, a table that
     sets none of ``keys`` and a wrong value are problems."""
     if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
@@ -234,6 +240,8 @@ def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, pr
             values["duration"] = float(spec["duration"])
         if "replicas" in spec and "replicas" in keys:
             values["replicas"] = _replicas(spec, f"{where}.replicas", 1, problems)
+        if "priority" in spec and "priority" in keys:
+            values["priority"] = _priority_of(spec, f"{where}.priority", problems)
         selectors = {key: wanted for key, wanted in spec.items() if key not in keys}
         bad = len(problems) > found or not _selectors_known(selectors, where, families, axes, allowed, problems)
         if not bad and not values:
@@ -300,6 +308,15 @@ def _replicas(table: dict, path: str, default: int, problems) -> int:
     if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= 1000:
         _problem(problems, path, value, "an integer 1-1000")
         return 1
+    return value
+
+
+def _priority_of(table: dict, path: str, problems) -> int:
+    """``table``'s ``priority`` (0 when absent): an integer -1000-1000, else a problem and 0."""
+    value = table.get("priority", 0)
+    if not isinstance(value, int) or isinstance(value, bool) or not -1000 <= value <= 1000:
+        _problem(problems, path, value, "an integer -1000-1000 (the queue's tier: higher first, 0 by default)")
+        return 0
     return value
 
 
