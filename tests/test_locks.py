@@ -279,6 +279,57 @@ def test_the_status_expects_runs_to_end_where_their_point_ended_or_past_their_t9
     assert runs["m_r1"]["expected_left"] == 0.0  # mixed at 3.325 s, 4 s held: at its end
 
 
+def test_the_status_expects_a_family_of_the_same_physics_to_end_and_run_at_its_kins_t95_and_rate(tmp_path, capsys):
+    """The index lists each run's physics and time.stop_after_mixed (``write_index``): a family not measured yet
+    whose runs have the physics of another's (a "<name>_t95" family ending when it mixes beside <name>) takes that
+    family's CPU rate (not the slowest family's) and ends where that family's ended runs at its point mixed, plus its
+    own margin; an unmixed run cut short before its duration tells nothing of its end, one at its duration says it
+    runs there."""
+    from fvdem.study.status import study_status
+    out = _status_folder(tmp_path)
+    index = json.loads((out / "study.json").read_text())
+    for row in index["runs"]:
+        row.update(physics="p-ar1" if row["family"] == "ar1" else "p-ar4", stop_after_mixed=2.0)
+    cut = out / "runs" / "x_r1"  # ar1's physics at its point, cut short unmixed at 1 s (an expansion run)
+    cut.mkdir()
+    (cut / "summary.json").write_text(json.dumps({"simulated_time": 1.0, "cpu_seconds": 150.0}))
+    index["runs"] += [
+        {"name": "x_r1", "family": "ar1_cut", "status": "pending", "folder": "runs/x_r1", "replica": 1,
+         "point": {"gas.u_over_umf": 2.0}, "duration": 1.0, "physics": "p-ar1", "stop_after_mixed": 2.0},
+        *({"name": f"t_r{k}", "family": "ar1_t95", "status": "pending", "folder": f"runs/t_r{k}", "replica": k,
+           "point": {"gas.u_over_umf": 2.0}, "duration": 8.0, "physics": "p-ar1", "stop_after_mixed": 0.0}
+          for k in (1, 2)),
+        {"name": "a_r2", "family": "ar1", "status": "pending", "folder": "runs/a_r2", "replica": 2,
+         "point": {"gas.u_over_umf": 2.0}, "duration": 8.0, "physics": "p-ar1", "stop_after_mixed": 2.0},
+        {"name": "n_r1", "family": "ar1_none", "status": "pending", "folder": "runs/n_r1", "replica": 1,
+         "point": {"gas.u_over_umf": 2.0}, "duration": 8.0, "physics": "p-ar1", "stop_after_mixed": None},
+        {"name": "u_r1", "family": "ar4_t95", "status": "pending", "folder": "runs/u_r1", "replica": 1,
+         "point": {"gas.u_over_umf": 2.0}, "duration": 8.0, "physics": "p-ar9", "stop_after_mixed": 0.0}]
+    (out / "study.json").write_text(json.dumps(index))
+    status = study_status(out)
+    runs, families = {r["name"]: r for r in status["runs"]}, status["families"]
+    # a_r1 mixed at 3 s (ended 2 s past it); x_r1 cut short unmixed at 1 s is left out of the expectation
+    assert [runs[n]["expected_left"] for n in ("t_r1", "t_r2", "a_r2")] == [pytest.approx(3.0)] * 2 + [
+        pytest.approx(5.0)]
+    assert runs["n_r1"]["expected_left"] == 8.0  # no margin: to its duration
+    assert families["ar1_t95"]["rate_from"] == ["ar1", "ar1_cut"]  # the measured ones: 1000 CPU s / 5 s, 150 / 1
+    rate = (1000.0 + 150.0) / 6.0
+    assert families["ar1_t95"]["expected_core_hours"] == pytest.approx(6.0 * rate / 3600.0)
+    assert runs["t_r1"]["expected_cpu_seconds_left"] == pytest.approx(3.0 * rate)
+    assert "rate_from" not in families["ar4_t95"] and status["unmeasured"] == ["ar4_t95"]  # none of its physics
+    assert runs["u_r1"]["expected_left"] == 8.0
+    assert main(["study", str(out), "--status"]) == 0
+    text = capsys.readouterr().out
+    assert "(ar4_t95 at the slowest family's rate: none measured yet)" in text
+    assert "(ar1_t95 at ar1 and ar1_cut's, ar1_none at ar1 and ar1_cut's: the same physics, none measured" in text
+    # a run of the same physics that ended unmixed at its duration: this one runs there too
+    (cut / "summary.json").write_text(json.dumps({"simulated_time": 8.0, "cpu_seconds": 150.0}))
+    index["runs"][-6]["duration"] = 8.0
+    (out / "study.json").write_text(json.dumps(index))
+    runs = {r["name"]: r for r in study_status(out)["runs"]}
+    assert runs["t_r1"]["expected_left"] == pytest.approx((3.0 + 8.0) / 2)
+
+
 def test_study_and_summary_files_are_replaced_at_once_for_readers_polling_them(tmp_path):
     """study.json and summary.json are read while they are rewritten (--status, a study's progress, --report):
     written to a temporary file and renamed over the old one, nothing else left in the folder."""

@@ -1869,6 +1869,8 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
                    for f, v, n in (("1_t95", 2.0, 8), ("4_mp_t95", 2.0, 6), ("4_mp_drag_t95", 2.0, 4),
                                    ("1_tall_t95", 2.9, 6), ("4_mp_tall_t95", 2.9, 4), ("4_mp_drag_tall_t95", 2.9, 4))}
     assert {r.priority for r in study.runs if not r.family.endswith("_t95")} == {0}
+    listed = {e["name"]: e["stop_after_mixed"] for e in write_index(tmp_path, study)["runs"]}  # for --status
+    assert listed["ar1_t95_u_over_umf2_r1"] == 0.0 and listed["ar1_u_over_umf2_r1"] == 2.0
     assert {r.overrides["domain.upper"][2] for r in study.runs if r.family.endswith("tall_t95")} == {2.1}
     seeds = {b.name: b.overrides.get("particles.insertion.seed") for b in study.beds if "_t95" in b.name}
     assert seeds == {**{f"ar1_t95{f'_r{k}' if k > 1 else ''}": 200 + k for k in range(1, 9)},

@@ -54,26 +54,33 @@ def study_status(out) -> dict:
             family["peak_memory_mb"] = max(family["peak_memory_mb"] or 0.0, row["peak_memory_mb"])
         family["left_simulated_seconds"] += row["left"]
     slowest = max((f["cpu_seconds"] / f["simulated"] for f in families.values() if f["simulated"] > 0), default=None)
-    unmeasured = []
+    kin = _kin_families(index["runs"])
+    unmeasured, rates = [], {}
     for name, family in families.items():
         rate = family["cpu_seconds"] / family["simulated"] if family["simulated"] > 0 else None
         family["cpu_per_simulated_second"] = rate
-        if rate is None and family["left_simulated_seconds"] > 0:
+        lenders = [k for k in kin.get(name, ()) if families[k]["simulated"] > 0] if rate is None else []
+        if lenders:  # a family not measured yet: the rate of those whose runs have its physics
+            family["rate_from"] = lenders
+            rates[name] = (sum(families[k]["cpu_seconds"] for k in lenders)
+                           / sum(families[k]["simulated"] for k in lenders))
+        elif rate is None and family["left_simulated_seconds"] > 0:
             unmeasured.append(name)
-        used = rate if rate is not None else slowest
+        used = rates[name] = rates.get(name, rate if rate is not None else slowest)
         family["left_core_hours"] = None if used is None else family["left_simulated_seconds"] * used / 3600.0
+    for family in families.values():
         del family["cpu_seconds"], family["simulated"]
-    _expect(runs, [entry_folder(out, r) for r in index["runs"]])
+    _expect(runs, index["runs"], [entry_folder(out, r) for r in index["runs"]])
     now = time.time()
     for r in runs:  # the CPU seconds each run is expected to take yet, and a running run's end at its threads
-        used = families[r["family"]]["cpu_per_simulated_second"] or slowest
+        used = rates[r["family"]]
         r["expected_cpu_seconds_left"] = None if used is None else r["expected_left"] * used
         threads = r.pop("threads", None) or 1
         if r["state"] == "running" and used is not None:
             r["expected_end"] = _clock(now + r["expected_cpu_seconds_left"] / threads)
     for name, family in families.items():
         family["expected_left_simulated_seconds"] = sum(r["expected_left"] for r in runs if r["family"] == name)
-        used = family["cpu_per_simulated_second"] or slowest
+        used = rates[name]
         family["expected_core_hours"] = (None if used is None
                                          else family["expected_left_simulated_seconds"] * used / 3600.0)
     counts = {state: sum(row["state"] == state for row in runs) for state in STATES}
@@ -111,27 +118,60 @@ def _bed_status(folder: Path) -> dict:
             "cpu_seconds": summary.get("cpu_seconds")}
 
 
-def _expect(runs: list, folders: list) -> None:
+def _kin_families(entries: list) -> dict:
+    """Each family's kin, by name: the other families with a run of the same physics as one of its runs (the index's
+    ``physics``: the same case at the same point but for time and output settings, e.g. a family of runs that end
+    when they mix beside the family it repeats)."""
+    by_physics = {}
+    for entry in entries:
+        if entry.get("physics"):
+            by_physics.setdefault(entry["physics"], set()).add(entry["family"])
+    kin = {}
+    for names in by_physics.values():
+        for name in names:
+            kin.setdefault(name, set()).update(names - {name})
+    return {name: sorted(others) for name, others in kin.items() if others}
+
+
+def _expect(runs: list, entries: list, folders: list) -> None:
     """Each run's ``expected_left``: the simulated seconds it is likely to run yet, where ``left`` is the most
-    (its duration). A run that has mixed and ends ``time.stop_after_mixed`` past its t95 (its case.toml) ends
-    there; a run whose point has ended replicas in its family ends, it is assumed, where they ended on average
-    (their mixed end, 2 s past t95 in the paper's study, or their duration); any other at its duration."""
-    points = [(r["family"], json.dumps(r["point"], sort_keys=True)) for r in runs]
-    ended = {}
-    for r, point in zip(runs, points):
+    (its duration). A run that has mixed and ends ``time.stop_after_mixed`` past its t95 ends there; one that has
+    not, where the ended runs of its physics at its point (its family's replicas, and the runs of another family
+    that differs in time settings alone: the index's ``physics``) would make it end on average: each mixed one's
+    t95 plus its own margin (the study file's, listed in the index), an unmixed one at its duration (one that ended
+    unmixed short of this run's duration, cut short, is left out); without a margin it runs to its duration. An
+    older index lists no margin: a run's case.toml tells it once it began; before, the run ends where its family's
+    ended replicas at its point did. Any other run ends at its duration."""
+    def point(r):
+        return r["family"], json.dumps(r["point"], sort_keys=True)
+
+    ended, siblings = {}, {}
+    for r, entry in zip(runs, entries):
         if r["state"] == "ended":
-            ended.setdefault(point, []).append(r["simulated_seconds"])
-    for r, folder, point in zip(runs, folders, points):
+            if entry.get("physics"):
+                ended.setdefault(entry["physics"], []).append((r.get("t95"), r["simulated_seconds"]))
+            siblings.setdefault(point(r), []).append(r["simulated_seconds"])
+    for r, entry, folder in zip(runs, entries, folders):
         if r["state"] in ("ended", NOT_PLANNED) or r["duration"] is None:
             r["expected_left"] = r["left"]
             continue
         end = r["duration"]
-        stop = _stop_after_mixed(folder) if r.get("t95") is not None else None
-        siblings = ended.get(point)
-        if stop is not None:
+        if "stop_after_mixed" in entry:
+            known, stop = True, entry["stop_after_mixed"]
+        else:
+            case = _folder_case(folder)
+            known, stop = case is not None, None if case is None else case.time.stop_after_mixed
+        # an unmixed run that ended before this one's duration (one cut short) bounds its t95 from below only
+        kin = [t95 for t95, held in ended.get(entry.get("physics"), ()) if t95 is not None or held >= end]
+        if not known:
+            ends = siblings.get(point(r))
+            end = min(end, sum(ends) / len(ends)) if ends else end
+        elif stop is None:
+            pass  # it runs to its duration, mixed or not
+        elif r.get("t95") is not None:
             end = min(end, r["t95"] + stop)
-        elif siblings:
-            end = min(end, sum(siblings) / len(siblings))
+        elif kin:
+            end = sum(end if t95 is None else min(end, t95 + stop) for t95 in kin) / len(kin)
         held = 0.0 if r["state"] == "partial" else r["simulated_seconds"]  # a partial run starts again
         r["expected_left"] = max(0.0, end - held)
 
@@ -140,12 +180,6 @@ def _clock(epoch: float, timespec: str = "minutes") -> str:
     """Local date and time of ``epoch`` (to the minute, or ``timespec``), ISO 8601 with its offset."""
     from datetime import datetime
     return datetime.fromtimestamp(epoch).astimezone().isoformat(timespec=timespec)
-
-
-def _stop_after_mixed(folder: Path):
-    """``time.stop_after_mixed`` [s] of a run's case (its folder's case.toml, read as a case: "2 s" is 2), or None."""
-    case = _folder_case(folder)
-    return None if case is None else case.time.stop_after_mixed
 
 
 def _run_status(out: Path, r: dict, chosen) -> tuple:
@@ -231,10 +265,14 @@ def format_status(status: dict) -> str:
         line = f"left: at most {status['left_core_hours']:.1f} core-hours at these rates"
         if status["unmeasured"]:
             line += f" ({', '.join(status['unmeasured'])} at the slowest family's rate: none measured yet)"
+        borrowed = [f"{name} at {' and '.join(f['rate_from'])}'s" for name, f in status["families"].items()
+                    if f.get("rate_from") and f["left_simulated_seconds"] > 0]
+        if borrowed:
+            line += f" ({', '.join(borrowed)}: the same physics, none measured yet)"
         if status["hours_at_running_now"] is not None:
             line += f", {status['hours_at_running_now']:.1f} h at the {counts['running']} run(s) running now"
         line += (f"; about {status['expected_core_hours']:.1f} core-hours if each run ends where its point's ended "
-                 "replicas did, or time.stop_after_mixed past its t95 where it has mixed")
+                 "runs of its physics would, or time.stop_after_mixed past its t95 where it has mixed")
         lines.append(line)
     elif status["left_simulated_seconds"] > 0:
         lines.append("left: no run has a measured rate yet")
@@ -247,7 +285,8 @@ def format_status(status: dict) -> str:
     ends = [f"{r['name']} about {r['expected_end'][11:16]}" for r in status["runs"] if r.get("expected_end")]
     if ends:
         lines.append("expected to end (at their family's CPU seconds per simulated s over the threads of their last "
-                     "run, where their point's ended replicas ended or time.stop_after_mixed past t95): "
+                     "run, where the ended runs of their physics at their point would make them end, or "
+                     "time.stop_after_mixed past t95): "
                      + ", ".join(ends))
     return "\n".join(lines)
 

@@ -37,6 +37,7 @@ class RunSpec:
     report: str = DEFAULT_REPORT  # the study's report: which values of its summary the run's result carries
     physics: str = ""  # its case's physics_fingerprint (its bed's state aside): tells a folder of an older case
     priority: int = 0  # the queue's tier among runs not started, higher first (``priority`` of its family or point)
+    stop_after_mixed: float | None = None  # its case's time.stop_after_mixed (the index lists it for --status)
 
 
 @dataclass(frozen=True)
@@ -200,17 +201,20 @@ def study_from_table(table: dict, path, out) -> Study:
     cluster = _table(table, "cluster", problems)
     check_cluster(cluster, problems)
     # every case is checked before anything runs (a bed's final state does not exist yet: not loaded)
-    checked = {}
+    checked, margins = {}, {}
     for spec in list(beds) + runs:
         overrides = dict(spec.overrides)
         try:
-            checked[id(spec)] = physics_fingerprint(to_toml(load_case(spec.case, overrides)), BED_STATE)
+            case = load_case(spec.case, overrides)
+            checked[id(spec)] = physics_fingerprint(to_toml(case), BED_STATE)
+            margins[id(spec)] = case.time.stop_after_mixed
         except CaseError as exc:
             label = spec.name if SAFE_NAME.match(spec.name) else f"[{spec.name!r}]"  # refused above as well
             problems += [f"{label}: {p}" for p in exc.problems]
     if problems:
         raise CaseError(problems)
-    beds, runs = ([replace(s, physics=checked[id(s)]) for s in specs] for specs in (beds, runs))
+    beds = [replace(s, physics=checked[id(s)]) for s in beds]
+    runs = [replace(s, physics=checked[id(s)], stop_after_mixed=margins[id(s)]) for s in runs]
     return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report)
 
 
