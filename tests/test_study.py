@@ -1087,6 +1087,7 @@ def test_a_lower_priority_tranche_starts_only_once_the_runs_queued_before_it_hav
     a run in progress counts in the top tier. Without priorities the order is the replicas' (a new family's
     first replica before an earlier family's second). A wrong priority is refused by key."""
     from fvdem.study.runner import _Queue
+    from fvdem.study.status import format_status, study_status
     text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
     text = text.replace('bed = "small"', 'bed = "small"\nreplicas = 2', 1)
     text = text.replace("[axes]", f'[families.late]\ncase = "{ROOT / "cases" / "demo.toml"}"\nbed = "small"\n'
@@ -1106,6 +1107,10 @@ def test_a_lower_priority_tranche_starts_only_once_the_runs_queued_before_it_hav
     taken = [r.name for r in queue.take(0)[1]]
     assert set(taken[:4]) == {n for n, t in tiers.items() if t == 0} and set(taken[4:]) == {
         "late_u_over_umf2", "late_u_over_umf2.9"}  # though only the late ones fit
+    (tmp_path / "out").mkdir()
+    assert write_index(tmp_path / "out", study)["runs"][-1]["priority"] == -1  # --status says why they wait
+    assert ("2 of the runs not started wait at priority -1 (the study file's), until every run of a higher priority "
+            "has started: late") in format_status(study_status(tmp_path / "out"))
     queue = _Queue(study.runs, 1)
     begun = next(r for r in study.runs if r.name == "late_u_over_umf2.9")
     Path(begun.folder).mkdir(parents=True)

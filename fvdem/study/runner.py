@@ -499,7 +499,7 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
 
     def listed(run, result=None):  # the run's latest result (else pending) with what the study file says of it
         return {**unflagged(result or _pending(run)), "replica": run.replica, "duration": run.duration,
-                "physics": run.physics, "stop_after_mixed": run.stop_after_mixed}
+                "physics": run.physics, "stop_after_mixed": run.stop_after_mixed, "priority": run.priority}
 
     # the index keeps the runs ``--only`` left out, and a run the study file no longer plans while its folder
     # holds something (nothing on disk goes unlisted), flagged ``"planned": false`` (``--status`` and the report

@@ -3,8 +3,9 @@ whether a study runs there now (its folder's lock: who, where, since when), each
 now, in progress from a checkpoint, not started, failed), the simulated seconds it holds against its duration
 and its report's values (seed 000's: t95, the mixing entropy it reached), the CPU seconds per simulated second
 and peak memory each family has cost so far, and what is left: simulated seconds and core-hours at those
-rates, at most (every run to its duration) and as expected (a run ends where its point's ended replicas did,
-or ``time.stop_after_mixed`` past its t95 once it has mixed), the hours that makes at the runs running now.
+rates, at most (every run to its duration) and as expected (a run ends where the ended runs of its physics at its
+point would make it end, or ``time.stop_after_mixed`` past its t95 once it has mixed), the hours that makes at the
+runs running now, and the runs that wait at a lower priority.
 Works on a study folder while its study runs (a few file reads per run), on a stopped one and on an archive of
 one (``fvdem study OUT --archive DEST``).
 """
@@ -28,11 +29,12 @@ STATES = ("ended", "running", "in progress", "partial", "not started", "failed",
 
 def study_status(out) -> dict:
     """The status of the study folder ``out`` (see the module): ``{"study", "folder", "running" (the lock's
-    record of the study process, or None), "scheduler", "runs": [{"name", "family", "point", "replica",
-    "state", "simulated_seconds", "duration", "left", "expected_left", "expected_cpu_seconds_left" (at its family's
-    rate so far, the slowest family's where its own has none; None before any), "expected_end" (a running run's, at
-    the threads of its last summary, one without), <the report's values>, "cpu_per_simulated_second",
-    "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second",
+    record of the study process, or None), "scheduler", "runs": [{"name", "family", "point", "replica", "priority"
+    (the study file's, 0 in an older index), "state", "simulated_seconds", "duration", "left", "expected_left",
+    "expected_cpu_seconds_left" (at its family's rate so far, else its kin's or the slowest family's; None before
+    any), "expected_end" (a running run's, at the threads of its last summary, one without), <the report's values>,
+    "cpu_per_simulated_second", "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second",
+    "rate_from" (where none is measured: the measured families of its physics whose rate it takes, ``_kin_families``),
     "runs_measured", "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
     "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
     "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
@@ -215,7 +217,7 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
     watched = {c: float(series[c][-1]) for c in chosen.watch if series is not None and c in series}
     cpu, measured = summary.get("cpu_seconds"), float(summary.get("simulated_time") or 0.0)
     row = {"name": r["name"], "family": r["family"], "point": r.get("point", {}), "replica": r.get("replica"),
-           "state": state, "simulated_seconds": held, "duration": duration,
+           "priority": r.get("priority", 0), "state": state, "simulated_seconds": held, "duration": duration,
            "left": (0.0 if state in ("ended", NOT_PLANNED) or duration is None
                     else duration if state == "partial" else max(0.0, duration - held)),
            **values, **watched,
@@ -252,6 +254,15 @@ def format_status(status: dict) -> str:
     lines += ["", ", ".join(f"{n} {state}" for state, n in counts.items() if n and state != NOT_PLANNED)
               + f" of {len(planned)} runs; {total - status['left_simulated_seconds']:.4g} of {total:.4g} simulated s "
               f"done, {status['left_simulated_seconds']:.4g} left" + (f" ({by_family})" if by_family else "")]
+    waiting = [r for r in planned if r["state"] == "not started"]
+    top = max((r["priority"] for r in planned), default=0)
+    later = {}
+    for r in waiting:
+        if r["priority"] < top:
+            later.setdefault(r["priority"], []).append(r)
+    for tier, runs in sorted(later.items(), reverse=True):
+        lines.append(f"{len(runs)} of the runs not started wait at priority {tier} (the study file's), until every run "
+                     f"of a higher priority has started: {', '.join(dict.fromkeys(r['family'] for r in runs))}")
     if counts[NOT_PLANNED]:
         lines.append(f"{counts[NOT_PLANNED]} run(s) not planned: the study file no longer lists them and they have not "
                      "ended; their folders are kept and not counted (fvdem study STUDY.toml --out "
@@ -293,9 +304,9 @@ def format_status(status: dict) -> str:
 
 def _value_columns(runs: list) -> list:
     """The report's value columns the runs have (in the first run's order)."""
-    skip = {"name", "family", "point", "replica", "state", "simulated_seconds", "duration", "left", "expected_left",
-            "expected_cpu_seconds_left", "expected_end", "cpu_per_simulated_second", "peak_memory_mb", "error",
-            "writer"}
+    skip = {"name", "family", "point", "replica", "priority", "state", "simulated_seconds", "duration", "left",
+            "expected_left", "expected_cpu_seconds_left", "expected_end", "cpu_per_simulated_second", "peak_memory_mb",
+            "error", "writer"}
     return list(dict.fromkeys(k for r in runs for k in r if k not in skip))
 
 
