@@ -57,18 +57,19 @@ def study_status(out) -> dict:
         family["left_simulated_seconds"] += row["left"]
     slowest = max((f["cpu_seconds"] / f["simulated"] for f in families.values() if f["simulated"] > 0), default=None)
     kin = _kin_families(index["runs"])
-    unmeasured, rates = [], {}
+    unmeasured, rates = [], {}  # rates: the CPU seconds per simulated second each family's runs are counted at
     for name, family in families.items():
         rate = family["cpu_seconds"] / family["simulated"] if family["simulated"] > 0 else None
-        family["cpu_per_simulated_second"] = rate
+        family["cpu_per_simulated_second"] = used = rate
         lenders = [k for k in kin.get(name, ()) if families[k]["simulated"] > 0] if rate is None else []
         if lenders:  # a family not measured yet: the rate of those whose runs have its physics
             family["rate_from"] = lenders
-            rates[name] = (sum(families[k]["cpu_seconds"] for k in lenders)
-                           / sum(families[k]["simulated"] for k in lenders))
-        elif rate is None and family["left_simulated_seconds"] > 0:
-            unmeasured.append(name)
-        used = rates[name] = rates.get(name, rate if rate is not None else slowest)
+            used = (sum(families[k]["cpu_seconds"] for k in lenders) / sum(families[k]["simulated"] for k in lenders))
+        elif rate is None:  # else the slowest family's
+            used = slowest
+            if family["left_simulated_seconds"] > 0:
+                unmeasured.append(name)
+        rates[name] = used
         family["left_core_hours"] = None if used is None else family["left_simulated_seconds"] * used / 3600.0
     for family in families.values():
         del family["cpu_seconds"], family["simulated"]

@@ -201,20 +201,19 @@ def study_from_table(table: dict, path, out) -> Study:
     cluster = _table(table, "cluster", problems)
     check_cluster(cluster, problems)
     # every case is checked before anything runs (a bed's final state does not exist yet: not loaded)
-    checked, margins = {}, {}
+    checked = {}  # id(spec) -> (its physics fingerprint, its case's time.stop_after_mixed)
     for spec in list(beds) + runs:
         overrides = dict(spec.overrides)
         try:
             case = load_case(spec.case, overrides)
-            checked[id(spec)] = physics_fingerprint(to_toml(case), BED_STATE)
-            margins[id(spec)] = case.time.stop_after_mixed
+            checked[id(spec)] = physics_fingerprint(to_toml(case), BED_STATE), case.time.stop_after_mixed
         except CaseError as exc:
             label = spec.name if SAFE_NAME.match(spec.name) else f"[{spec.name!r}]"  # refused above as well
             problems += [f"{label}: {p}" for p in exc.problems]
     if problems:
         raise CaseError(problems)
-    beds = [replace(s, physics=checked[id(s)]) for s in beds]
-    runs = [replace(s, physics=checked[id(s)], stop_after_mixed=margins[id(s)]) for s in runs]
+    beds = [replace(s, physics=checked[id(s)][0]) for s in beds]
+    runs = [replace(s, physics=checked[id(s)][0], stop_after_mixed=checked[id(s)][1]) for s in runs]
     return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report)
 
 
@@ -308,19 +307,24 @@ def _seconds(value, path: str, problems) -> bool:
 
 def _replicas(table: dict, path: str, default: int, problems) -> int:
     """``table``'s ``replicas`` (``default`` when absent): an integer 1-1000, else a problem and 1."""
-    value = table.get("replicas", default)
-    if not isinstance(value, int) or isinstance(value, bool) or not 1 <= value <= 1000:
-        _problem(problems, path, value, "an integer 1-1000")
-        return 1
-    return value
+    return _integer(table, "replicas", path, default, (1, 1000), 1, problems)
 
 
 def _priority_of(table: dict, path: str, problems) -> int:
     """``table``'s ``priority`` (0 when absent): an integer -1000-1000, else a problem and 0."""
-    value = table.get("priority", 0)
-    if not isinstance(value, int) or isinstance(value, bool) or not -1000 <= value <= 1000:
-        _problem(problems, path, value, "an integer -1000-1000 (the queue's tier: higher first, 0 by default)")
-        return 0
+    return _integer(table, "priority", path, 0, (-1000, 1000), 0, problems,
+                    " (the queue's tier: higher first, 0 by default)")
+
+
+def _integer(table: dict, key: str, path: str, default: int, span: tuple, fallback: int, problems,
+             why: str = "") -> int:
+    """``table[key]`` (``default`` when absent): an integer within ``span`` (a bool is not one), else a problem at
+    ``path`` ("an integer <low>-<high>" and ``why``) and ``fallback``."""
+    value = table.get(key, default)
+    low, high = span
+    if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
+        _problem(problems, path, value, f"an integer {low}-{high}{why}")
+        return fallback
     return value
 
 
