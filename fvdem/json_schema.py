@@ -105,6 +105,9 @@ def study_schema() -> dict:
     seconds = {"type": "number", "exclusiveMinimum": 0, "maximum": 1e6}
     replicas = {"type": "integer", "minimum": 1, "maximum": 1000,
                 "description": "repeats; replica k >= 2 starts from its own bed (insertion seed + k - 1)"}
+    priority = {"type": "integer", "minimum": -1000, "maximum": 1000, "default": 0,
+                "description": "the queue's tier of these runs while not started, higher first (a later tranche "
+                               "at -1)"}
     bed = {"type": "object", "required": ["case"], "additionalProperties": False,
            "properties": {"case": {"type": "string", "description": "a case file, relative to the study file"},
                           "set": settings}}
@@ -112,7 +115,7 @@ def study_schema() -> dict:
               "properties": {**bed["properties"],
                              "bed": {"type": "string", "description": "the bed (a [beds] name) its runs start from"},
                              "duration": {**seconds, "description": "this family's own simulated seconds"},
-                             "replicas": replicas}}
+                             "replicas": replicas, "priority": priority}}
     return {"$schema": SCHEMA_VERSION, "title": "fvdem study file",
             "description": "A sweep of fvdem runs (fvdem study): docs/studies.md",
             "type": "object", "required": ["duration", "families"], "additionalProperties": False,
@@ -140,12 +143,14 @@ def study_schema() -> dict:
                                              "matching table decides"},
                 "points": {"type": "array",
                            "items": {"type": "object",
-                                     "anyOf": [{"required": ["duration"]}, {"required": ["replicas"]}],
-                                     "properties": {"duration": seconds, "replicas": replicas}},
-                           "description": "runs with their own simulated seconds and/or replicas (e.g. one more "
-                                          "where two lie within their spread): the family and axis values (each a "
-                                          "value or a list) they match; after [[durations]], the last matching "
-                                          "table decides each key"},
+                                     "anyOf": [{"required": ["duration"]}, {"required": ["replicas"]},
+                                               {"required": ["priority"]}],
+                                     "properties": {"duration": seconds, "replicas": replicas,
+                                                    "priority": priority}},
+                           "description": "runs with their own simulated seconds, replicas (e.g. one more where "
+                                          "two lie within their spread) and/or priority: the family and axis "
+                                          "values (each a value or a list) they match; after [[durations]], the "
+                                          "last matching table decides each key"},
                 "cluster": {"type": "object", "properties": {"kind": {"enum": list(CLUSTER_KINDS)},
                                                               "workers": {"type": "integer", "minimum": 1}},
                             "description": "where the runs go: local, or dask-jobqueue's slurm, pbs, sge, lsf "

@@ -11,6 +11,7 @@ import pytest
 
 from fvdem.case import CaseError, case_from_dict
 from fvdem.json_schema import case_schema, dumps, study_schema
+from fvdem.study.sweep import study_from_table
 
 jsonschema = pytest.importorskip("jsonschema")
 ROOT = Path(__file__).resolve().parents[1]
@@ -66,3 +67,20 @@ def test_a_value_with_a_unit_and_a_study_with_a_wrong_key_or_case_key():
     assert errors(study_schema(), {**study, "replica": 2})
     assert errors(study_schema(), {**study, "settings": {"gas.u_over_um": 2.0}})
     assert errors(study_schema(), {**study, "families": {"ar1": {"case": "x.toml", "bed": "small", "replicas": 0}}})
+
+
+@pytest.mark.parametrize("priority, accepted", [(-1, True), (1000, True), (2000, False), (1.5, False),
+                                                ("low", False), (True, False)])
+def test_a_priority_the_study_loader_takes_or_refuses_the_schema_does_too(priority, accepted, tmp_path):
+    """``priority`` of a family and of a [[points]] table: the schema and ``study_from_table`` agree."""
+    study = tomllib.loads((ROOT / "studies" / "smoke.toml").read_text())
+    family = next(iter(study["families"]))
+    for table in ({**study, "families": {**study["families"], family: {**study["families"][family],
+                                                                        "priority": priority}}},
+                  {**study, "points": [{"family": family, "priority": priority}]}):
+        assert (errors(study_schema(), table) == []) is accepted
+        if accepted:
+            study_from_table(table, ROOT / "studies" / "smoke.toml", tmp_path / "out")
+        else:
+            with pytest.raises(CaseError, match="priority"):
+                study_from_table(table, ROOT / "studies" / "smoke.toml", tmp_path / "out")
