@@ -19,6 +19,9 @@ BED_STATE = ("particles.initial_state",)
 
 STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
               "durations", "points", "cluster", "report"}
+BED_KEYS = {"case", "set"}  # a [beds.NAME] table's
+FAMILY_KEYS = BED_KEYS | {"bed", "duration", "replicas", "priority"}  # a [families.NAME] table's
+POINT_KEYS = ("duration", "replicas", "priority")  # what a [[points]] table sets ([[durations]]: duration)
 
 
 @dataclass(frozen=True)
@@ -108,7 +111,7 @@ def study_from_table(table: dict, path, out) -> Study:
         if not isinstance(spec["case"], str) or not spec["case"].strip():
             _problem(problems, f"{kind}.{key}.case", spec["case"], "the path of a case file (a string)")
             return None, {}
-        allowed = {"case", "set"} | ({"bed", "duration", "replicas", "priority"} if kind == "families" else set())
+        allowed = FAMILY_KEYS if kind == "families" else BED_KEYS
         for k in sorted(set(spec) - allowed):
             _problem(problems, f"{kind}.{key}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
                      + ", ".join(sorted(allowed)))
@@ -154,8 +157,7 @@ def study_from_table(table: dict, path, out) -> Study:
     # [[durations]] (duration) and [[points]] (duration, replicas, priority): the last table that matches a run
     # decides
     chosen = (_point_tables(table.get("durations", []), "durations", ("duration",), families, axes, problems)
-              + _point_tables(table.get("points", []), "points", ("duration", "replicas", "priority"), families, axes,
-                              problems))
+              + _point_tables(table.get("points", []), "points", POINT_KEYS, families, axes, problems))
     runs = []
     names = list(axes)
     for family, spec in families.items():
