@@ -2153,6 +2153,8 @@ def test_the_eta_counts_only_what_this_invocation_simulated():
     started = time.perf_counter() - 100.0
     line = progress_line(9, 44, "r", "finished", "", started, 70.0, 464.0, " simulated s", work_start=60.0)
     assert float(line.rsplit("ETA ", 1)[1].split()[0]) == pytest.approx(394.0 / 0.1, rel=0.01)
+    assert line.endswith("s (1 h 06 min)")  # 3,940 s: an hour or more reads in hours too
+    assert progress_line(44, 44, "r", "finished", "", started).endswith("ETA 0 s")  # seconds alone below an hour
     assert progress_line(8, 44, "r", "skipped", "", started, 60.0, 464.0, work_start=60.0).endswith("ETA ?")
 
 

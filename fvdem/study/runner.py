@@ -35,8 +35,12 @@ def progress_line(done: int, total: int, name: str, status: str, detail: str, st
     rate = (done_work - work_start) / elapsed if elapsed > 0 and done_work > work_start else 0.0
     eta = (total_work - done_work) / rate if rate else math.nan
     work = f"{done_work:.4g} of {total_work:.4g}{unit} done, " if work_done is not None else ""
+    left = "?" if eta != eta else f"{eta:.0f} s"
+    if eta == eta and eta >= 3600.0:  # a campaign's: hours too
+        minutes = round(eta / 60.0)
+        left += f" ({minutes // 60} h {minutes % 60:02d} min)"
     return (f"[{done}/{total}] {name}: {status}" + (f" ({detail})" if detail else "")
-            + f"; {work}{elapsed:.0f} s wall, ETA " + (f"{eta:.0f} s" if eta == eta else "?"))
+            + f"; {work}{elapsed:.0f} s wall, ETA {left}")
 
 
 def _guarded(function, item, threads):
