@@ -99,13 +99,14 @@ def case_keys(cls=Case, prefix: str = "") -> list[str]:
 def study_schema() -> dict:
     """The JSON Schema of a study file (``fvdem.study``): its tables, the case keys its settings take."""
     from .study import CLUSTER_KINDS, REPORTS, report_for
+    from .study.sweep import PRIORITY_SPAN, REPLICAS_SPAN
     report_for(None)  # every registered report
     settings = {"type": "object", "propertyNames": {"enum": case_keys()},
                 "description": "case keys (dotted, e.g. \"gas.inlet_ramp\") and their values"}
     seconds = {"type": "number", "exclusiveMinimum": 0, "maximum": 1e6}
-    replicas = {"type": "integer", "minimum": 1, "maximum": 1000,
+    replicas = {"type": "integer", "minimum": REPLICAS_SPAN[0], "maximum": REPLICAS_SPAN[1],
                 "description": "repeats; replica k >= 2 starts from its own bed (insertion seed + k - 1)"}
-    priority = {"type": "integer", "minimum": -1000, "maximum": 1000, "default": 0,
+    priority = {"type": "integer", "minimum": PRIORITY_SPAN[0], "maximum": PRIORITY_SPAN[1], "default": 0,
                 "description": "the queue's tier of these runs while not started, higher first (a later tranche "
                                "at -1)"}
     bed = {"type": "object", "required": ["case"], "additionalProperties": False,

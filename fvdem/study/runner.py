@@ -35,12 +35,18 @@ def progress_line(done: int, total: int, name: str, status: str, detail: str, st
     rate = (done_work - work_start) / elapsed if elapsed > 0 and done_work > work_start else 0.0
     eta = (total_work - done_work) / rate if rate else math.nan
     work = f"{done_work:.4g} of {total_work:.4g}{unit} done, " if work_done is not None else ""
-    left = "?" if eta != eta else f"{eta:.0f} s"
-    if eta == eta and eta >= 3600.0:  # a campaign's: hours too
-        minutes = round(eta / 60.0)
-        left += f" ({minutes // 60} h {minutes % 60:02d} min)"
+    if eta != eta:
+        left = "?"
+    else:  # a campaign's, an hour or more: hours too
+        left = f"{eta:.0f} s" + (f" ({_hours_minutes(eta)})" if eta >= 3600.0 else "")
     return (f"[{done}/{total}] {name}: {status}" + (f" ({detail})" if detail else "")
             + f"; {work}{elapsed:.0f} s wall, ETA {left}")
+
+
+def _hours_minutes(seconds: float) -> str:
+    """``seconds`` as "H h MM min" (rounded to the minute)."""
+    minutes = max(0, round(seconds / 60.0))
+    return f"{minutes // 60} h {minutes % 60:02d} min"
 
 
 def _guarded(function, item, threads):
@@ -316,8 +322,7 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
     client, description = make_client(study.cluster, scheduler, workers, threads)
     log(f"{description}; Dask dashboard at {getattr(client, 'dashboard_link', None) or 'none'}")
     if until is not None:
-        minutes = max(0, round((until - time.time()) / 60.0))
-        log(f"stops at {_clock(until, 'seconds')} (--until), in {minutes // 60} h {minutes % 60:02d} min; until then a "
+        log(f"stops at {_clock(until, 'seconds')} (--until), in {_hours_minutes(until - time.time())}; until then a "
             "free worker takes first the runs expected to end by then")
     tag = task_tag(study, out)
     chosen = report_for(study.report)

@@ -22,6 +22,7 @@ STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds",
 BED_KEYS = {"case", "set"}  # a [beds.NAME] table's
 FAMILY_KEYS = BED_KEYS | {"bed", "duration", "replicas", "priority"}  # a [families.NAME] table's
 POINT_KEYS = ("duration", "replicas", "priority")  # what a [[points]] table sets ([[durations]]: duration)
+REPLICAS_SPAN, PRIORITY_SPAN = (1, 1000), (-1000, 1000)  # the integers ``replicas`` and ``priority`` take
 
 
 @dataclass(frozen=True)
@@ -309,12 +310,12 @@ def _seconds(value, path: str, problems) -> bool:
 
 def _replicas(table: dict, path: str, default: int, problems) -> int:
     """``table``'s ``replicas`` (``default`` when absent): an integer 1-1000, else a problem and 1."""
-    return _integer(table, "replicas", path, default, (1, 1000), 1, problems)
+    return _integer(table, "replicas", path, default, REPLICAS_SPAN, 1, problems)
 
 
 def _priority_of(table: dict, path: str, problems) -> int:
     """``table``'s ``priority`` (0 when absent): an integer -1000-1000, else a problem and 0."""
-    return _integer(table, "priority", path, 0, (-1000, 1000), 0, problems,
+    return _integer(table, "priority", path, 0, PRIORITY_SPAN, 0, problems,
                     " (the queue's tier: higher first, 0 by default)")
 
 
