@@ -28,6 +28,16 @@ def test_random_colours_approach_one():
     assert lacey_index(position, colour, LOWER, UPPER) == pytest.approx(1.0, abs=0.05)
 
 
+def test_one_particle_a_cell_has_zero_entropy_and_no_lacey_index(recwarn):
+    """Each occupied cell holds one particle (a sparse bed, the first chunk of a suspended run): every cell is
+    pure (S = 0), and Lacey's random-mix variance s0 / n equals s0, so the index is undefined: nan, quietly."""
+    position = np.array([[0.01, 0.01, 0.01], [0.01, 0.01, 0.5], [0.1, 0.1, 0.9]])
+    colour = np.array([0, 1, 1])
+    assert mixing_entropy(position, colour, LOWER, UPPER) == 0.0
+    assert np.isnan(lacey_index(position, colour, LOWER, UPPER))
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
 def test_entropy_of_a_known_cell_mixture():
     """Two occupied cells: one 50/50 (S = ln 2), one 25/75 (S = -(1/4 ln 1/4 + 3/4 ln 3/4)), equal counts."""
     position = np.array([[0.01, 0.01, 0.01]] * 4 + [[0.01, 0.01, 0.5]] * 4)

@@ -59,7 +59,7 @@ def mixing_indices(position, colour, lower, upper, cells=(5, 5, 35)):
     s = _binary_entropy(x1)
     entropy = float((s * n_cell).sum() / total.sum() / np.log(2.0))
     p = ones.sum() / total.sum()
-    if p in (0.0, 1.0):
+    if p in (0.0, 1.0) or n_cell.mean() == 1.0:  # one colour, or one particle a cell: no random-mix variance
         return entropy, float("nan")
     variance = float(np.sum(n_cell * (x1 - p) ** 2) / n_cell.sum())
     s0 = p * (1 - p)
