@@ -41,8 +41,10 @@ class _StoppedBeforeStart(Exception):
 def cmd_run(args) -> int:
     import signal
     from .simulation import Simulation
-    # Ctrl-C or SIGTERM while the run is being set up (imports, numba's cache, the initial state) stops
-    # it cleanly too; once it runs, Simulation.run's own handlers stop it at a checkpoint
+    # Ctrl-C or SIGTERM while the run is being set up (the case, the folder, numba's cache, the initial
+    # state) stops it cleanly too; once it runs, Simulation.run's own handlers stop it at a checkpoint.
+    # One that comes earlier, while the interpreter imports fvdem, ends the process before it has written
+    # anything (exit status 143 in a shell)
     running = []
 
     def stop(*_):
