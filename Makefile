@@ -3,6 +3,9 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+# the test suite's pytest-xdist workers (whole test files each: tests/test_slurm.py's SLURM serves its file);
+# `make test TEST_WORKERS=0` runs it in one process
+TEST_WORKERS ?= 2
 
 .PHONY: demo test venv clean bench clean-cache smoke study-figures
 
@@ -17,7 +20,7 @@ $(STAMP): $(BIN)/python setup.cfg pyproject.toml
 venv: $(STAMP)
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 demo: $(STAMP)
 	$(BIN)/fvdem run cases/demo.toml --out demo_out --overwrite

@@ -1,9 +1,19 @@
 """Shared helpers: tiny DEM scenes built directly from the library, and a drifting bed for the gas solver."""
-import numpy as np
-import pytest
+import os
 
-from fvdem.dem.particles import ParticleArrays
-from fvdem.dem.system import Box, ContactModel, DEMSystem
+# `make test` runs the suite on two pytest-xdist workers; each test's numba threads (all cores) then share the
+# cores with the other worker's. With OpenMP's default spinning wait a thread waiting at the end of a parallel
+# loop holds a core the other worker needs: four numba-heavy tests took 229-254 s on two workers against 51 s
+# on one; with waiting threads asleep, 42 s (2 cores, 2026-12-05, docs/benchmarks.md). Before numba loads its
+# OpenMP library, in the workers and the runs they start; a user's own setting is kept
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from fvdem.dem.particles import ParticleArrays  # noqa: E402
+from fvdem.dem.system import Box, ContactModel, DEMSystem  # noqa: E402
 
 SPHERE_D = 5.3e-3
 DENSITY = 1442.0
