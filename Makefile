@@ -19,7 +19,10 @@ $(STAMP): $(BIN)/python setup.cfg pyproject.toml
 
 venv: $(STAMP)
 
+# the kernels compiled once first (`fvdem compile`: a few seconds when cached), so that the workers and the runs
+# the tests start load them from numba's cache instead of each compiling them at the same time
 test: $(STAMP)
+	$(BIN)/fvdem compile
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 demo: $(STAMP)

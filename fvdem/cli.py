@@ -319,6 +319,28 @@ def registered(kind: str | None = None) -> dict:
     return table if kind is None else {kind: table[kind]}
 
 
+def cmd_compile(args) -> int:
+    """Compile the kernels into numba's cache before the first run (``fvdem.warmup``)."""
+    from .warmup import compile_kernels
+
+    def report(name, result):
+        if not args.json:
+            print(f"{name}: {result['seconds']:.1f} s, " + (f"{len(result['compiled'])} kernel(s) compiled"
+                                                           if result["compiled"] else "every kernel from the cache"),
+                  file=sys.stderr, flush=True)
+    try:
+        result = compile_kernels(jobs=args.jobs, report=report)
+    except RuntimeError as exc:  # a scene failed: its interpreter's last lines
+        return _fail(str(exc), 1)
+    compiled = sum(len(r["compiled"]) for r in result["scenes"].values())
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(f"fvdem compile: {compiled} kernel(s) compiled in {result['wall_seconds']:.0f} s "
+              f"({args.jobs} process(es) at a time); later runs load them from numba's cache", flush=True)
+    return 0
+
+
 def cmd_laws(args) -> int:
     table = registered(args.kind)
     if args.json:
@@ -495,6 +517,12 @@ def make_parser() -> argparse.ArgumentParser:
     study.add_argument("--json", action="store_true", help="the result as one JSON line")
     study.set_defaults(func=cmd_study)
     sub.add_parser("info", help="versions and threads").set_defaults(func=cmd_info)
+    compile_ = sub.add_parser("compile", help="compile the kernels into numba's cache before a first run, study or "
+                                              "job array (a few seconds when they are cached)")
+    compile_.add_argument("--jobs", type=positive_count, default=min(2, os.cpu_count() or 1),
+                          help="processes at a time (default: 2, or 1 on one CPU)")
+    compile_.add_argument("--json", action="store_true", help="the scenes' times and compiled kernels as one JSON line")
+    compile_.set_defaults(func=cmd_compile)
     schema = sub.add_parser("schema", help="print the case-file reference (Markdown)")
     schema.add_argument("--docs", action="store_true", help="the form of docs/case-reference.md (registries by name)")
     schema.add_argument("--json-schema", choices=("case", "study"),
