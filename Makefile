@@ -19,10 +19,10 @@ $(STAMP): $(BIN)/python setup.cfg pyproject.toml
 
 venv: $(STAMP)
 
-# the kernels compiled once first (`fvdem compile`: a few seconds when cached), so that the workers and the runs
-# the tests start load them from numba's cache instead of each compiling them at the same time
+# (no `fvdem compile` first: measured beside the campaign on a fresh clone, 2026-12-06, it saved 42 s of CPU and
+# no wall time, 1,912 s against 1,893 s: the two workers seldom need the same kernel at the same moment, and the
+# compile first leaves one core idle; docs/benchmarks.md)
 test: $(STAMP)
-	$(BIN)/fvdem compile
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 demo: $(STAMP)

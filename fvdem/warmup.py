@@ -4,7 +4,7 @@ fvdem's kernels are cached numba functions (``cache=True``): the first run after
 compiles them, about 4 minutes of one core for a coupled case on a 2-core AMD EPYC (Zen 1, 2026-12-06), most
 of it two kernels (the contact forces, about 110 s, and the particle-to-grid map, about 60 s). Every process
 that needs a kernel before the cache holds it compiles it too: the Dask workers of a first study, the jobs of a
-first SLURM array, the two pytest workers of ``make test``, all at once. ``compile_kernels`` runs small scenes
+first SLURM array, all at once. ``compile_kernels`` runs small scenes
 of every kind the shipped cases run (spheres and AR-4 rods fluidized with the paper's closures, drag only, the
 settling beds, the gas through a fixed bed, the periodic liquid suspension) for a few steps each, in two
 processes (``CHAINS``), so that each kernel is compiled once and every later process loads it. Where every

@@ -60,7 +60,7 @@ LAYERS = [
     {"analysis", "io"},
     {"model", "scenes", "monitors"},
     {"simulation"},
-    {"study"},
+    {"study", "warmup"},
     {"json_schema"},
     {"cli"},
     {"__main__", "__init__"},
