@@ -19,6 +19,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
 
@@ -107,16 +108,19 @@ def run_scene(table: dict, steps: int) -> dict:
 
 def _chain_process(names, env: dict, report) -> dict:
     """Run the scenes ``names`` in one fresh interpreter, in order: ``{name: {"seconds", "compiled"}}``."""
-    process = subprocess.Popen([sys.executable, "-m", "fvdem.warmup", *names], stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, env=env)
-    results = {}
-    for line in process.stdout:  # one JSON line per scene, as each ends
-        name, result = json.loads(line)
-        results[name] = result
-        if report is not None:
-            report(name, result)
-    stderr = process.stderr.read()
-    if process.wait() != 0:
+    with tempfile.TemporaryFile("w+") as errors:  # a file, not a pipe: warnings never block the scenes
+        process = subprocess.Popen([sys.executable, "-m", "fvdem.warmup", *names], stdout=subprocess.PIPE,
+                                   stderr=errors, text=True, env=env)
+        results = {}
+        for line in process.stdout:  # one JSON line per scene, as each ends
+            name, result = json.loads(line)
+            results[name] = result
+            if report is not None:
+                report(name, result)
+        process.wait()
+        errors.seek(0)
+        stderr = errors.read()
+    if process.returncode != 0:
         tail = "\n".join(stderr.strip().splitlines()[-5:])
         failed = next((n for n in names if n not in results), names[-1])
         raise RuntimeError(f"the scene {failed!r} failed (exit {process.returncode}):\n{tail}")
