@@ -90,20 +90,28 @@ def fvdem_dispatchers() -> list:
     return list(found.values())
 
 
+def _label(dispatcher, signature) -> str:
+    return f"{dispatcher.py_func.__module__}.{dispatcher.py_func.__qualname__}{signature}"
+
+
+def kernel_signatures() -> set[str]:
+    """Every fvdem kernel signature this process holds compiled (from numba's cache or compiled here)."""
+    return {_label(d, sig) for d in fvdem_dispatchers() for sig in d.signatures}
+
+
 def compiled_here() -> list[str]:
     """The fvdem kernels (and signatures) this process compiled rather than loaded from numba's cache."""
-    return sorted(f"{d.py_func.__module__}.{d.py_func.__qualname__}{sig}"
-                  for d in fvdem_dispatchers() for sig, n in d.stats.cache_misses.items() if n)
+    return sorted(_label(d, sig) for d in fvdem_dispatchers() for sig, n in d.stats.cache_misses.items() if n)
 
 
 def run_scene(table: dict, steps: int) -> dict:
     """Build ``table``'s case and advance it ``steps`` steps in this process, no output folder: what it compiled."""
     from .case.parse import case_from_dict
     from .simulation import Simulation
-    start = time.perf_counter()
+    before, start = set(compiled_here()), time.perf_counter()
     sim = Simulation(case_from_dict(table, source="fvdem compile"), progress=False, threads=1)
     sim.run(steps * sim.time_step)
-    return {"seconds": time.perf_counter() - start, "compiled": compiled_here()}
+    return {"seconds": time.perf_counter() - start, "compiled": [k for k in compiled_here() if k not in before]}
 
 
 def _chain_process(names, env: dict, report) -> dict:
@@ -148,7 +156,4 @@ def compile_kernels(scenes=None, jobs: int = 2, report=None) -> dict:
 
 if __name__ == "__main__":  # scenes in this process, in order (``compile_kernels`` starts one per chain)
     for scene in sys.argv[1:]:
-        before = set(compiled_here())
-        result = run_scene(*SCENES[scene])
-        result["compiled"] = [k for k in result["compiled"] if k not in before]
-        print(json.dumps([scene, result]), flush=True)
+        print(json.dumps([scene, run_scene(*SCENES[scene])]), flush=True)

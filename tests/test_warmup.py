@@ -16,12 +16,7 @@ import json, sys, tomllib
 from pathlib import Path
 from fvdem.case.parse import case_from_dict
 from fvdem.simulation import Simulation
-from fvdem.warmup import SCENES, fvdem_dispatchers, run_scene
-
-
-def signatures():
-    return {f"{d.py_func.__module__}.{d.py_func.__qualname__}{s}" for d in fvdem_dispatchers() for s in d.signatures}
-
+from fvdem.warmup import SCENES, kernel_signatures as signatures, run_scene
 
 for table, steps in SCENES.values():
     run_scene(table, steps)
