@@ -47,7 +47,7 @@ def test_the_scenes_cover_every_kernel_signature_of_the_shipped_cases():
     assert all(kernels == [] for kernels in new.values()), {k: v for k, v in new.items() if v}
 
 
-def test_fvdem_compile_reports_each_scene_and_what_it_compiled():
+def test_fvdem_compile_reports_each_scene_and_a_second_call_compiles_nothing():
     result = subprocess.run([sys.executable, "-m", "fvdem", "compile", "--json"], capture_output=True, text=True,
                             cwd=ROOT, timeout=1800)
     assert result.returncode == 0, result.stderr[-3000:]
@@ -56,6 +56,11 @@ def test_fvdem_compile_reports_each_scene_and_what_it_compiled():
     assert set(report["scenes"]) == set(SCENES)
     for name, scene in report["scenes"].items():
         assert scene["seconds"] > 0 and isinstance(scene["compiled"], list), name
+    # and a second call finds every kernel cached
+    again = subprocess.run([sys.executable, "-m", "fvdem", "compile", "--json"], capture_output=True, text=True,
+                           cwd=ROOT, timeout=1800)
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert all(s["compiled"] == [] for s in json.loads(again.stdout.strip().splitlines()[-1])["scenes"].values())
 
 
 def test_a_wrong_job_count_is_refused_before_anything_runs():
