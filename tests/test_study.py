@@ -1859,12 +1859,13 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     # and, for the bed expansion at 1.6 and 1.7 Umf alone, AR-1 and AR-4 MP cut short after its window (5 s) from
     # beds of their own: two replicas of AR-1, four of AR-4 MP (the campaign's spreads: 0.01-0.09 and 0.45-0.66),
     # at 1.7 twelve of AR-1 and eighteen of AR-4 MP, at 2.0 three of AR-4 MP; and the findings' plans at least
-    # cost: at 1.6 Umf AR-4 MP and MP drag only to five, at 2.0 AR-4 MP to three and drag only to five, AR-4 MP
-    # and MP drag only at 2.9 in the tall column, AR-1 at 2.3 and at 2.9 in the tall column to three; then, a
+    # cost: at 1.6 Umf AR-4 MP to three (at priority 1) and MP drag only to four, AR-4 MP cut short to five, at 2.0
+    # AR-4 MP to three and drag only to five, AR-4 MP and MP drag only at 2.9 in the tall column, AR-1 at 2.3 and at
+    # 2.9 in the tall column to three; then, a
     # tranche at priority -1 for the differences at 2.0 and 2.9 Umf, runs that end when they mix from beds of their
     # own (seeds from 201): at 2.0 eight of AR-1, six of AR-4 MP and four of drag only, at 2.9 in the tall column
     # six, four and four
-    assert len(study.runs) == 138 and {r.replica for r in study.runs} == set(range(1, 19))
+    assert len(study.runs) == 136 and {r.replica for r in study.runs} == set(range(1, 19))
     cut = {(r.family, r.point["gas.u_over_umf"]): [] for r in study.runs if r.family.endswith("_t95")}
     for r in study.runs:
         if r.family.endswith("_t95"):
@@ -1874,7 +1875,8 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
                                    for k in range(1, n + 1)]
                    for f, v, n in (("1_t95", 2.0, 8), ("4_mp_t95", 2.0, 6), ("4_mp_drag_t95", 2.0, 4),
                                    ("1_tall_t95", 2.9, 6), ("4_mp_tall_t95", 2.9, 4), ("4_mp_drag_tall_t95", 2.9, 4))}
-    assert {r.priority for r in study.runs if not r.family.endswith("_t95")} == {0}
+    assert {r.name for r in study.runs if r.priority == 1} == {f"ar4_mp_u_over_umf1.6_r{k}" for k in (1, 2, 3)}
+    assert {r.priority for r in study.runs if not r.family.endswith("_t95") and r.priority != 1} == {0}
     listed = {e["name"]: e["stop_after_mixed"] for e in write_index(tmp_path, study)["runs"]}  # for --status
     assert listed["ar1_t95_u_over_umf2_r1"] == 0.0 and listed["ar1_u_over_umf2_r1"] == 2.0
     assert {r.overrides["domain.upper"][2] for r in study.runs if r.family.endswith("tall_t95")} == {2.1}
@@ -1885,11 +1887,11 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
                     beds=tuple(b for b in study.beds if "_t95" not in b.name))
     short = {r.name: (r.duration, r.bed) for r in study.runs if "expansion" in r.name}
     assert short == {f"ar{f}_expansion_u_over_umf{v:g}_r{k}": (5.0, f"ar{f[0]}_expansion" + (f"_r{k}" if k > 1 else ""))
-                     for f, n in (("1", {1.6: 2, 1.7: 12}), ("4_mp", {1.6: 4, 1.7: 18, 2.0: 3})) for v in n
+                     for f, n in (("1", {1.6: 2, 1.7: 12}), ("4_mp", {1.6: 5, 1.7: 18, 2.0: 3})) for v in n
                      for k in range(1, n[v] + 1)}
     assert sorted((r.name, r.bed) for r in study.runs if r.replica > 2 and "expansion" not in r.name) == sorted(
         [(f"ar4_mp{drag}_u_over_umf{v}_r{k}", f"ar4_r{k}") for drag in ("", "_drag") for v in ("1.6", "2")
-         for k in range(3, 6) if drag or v == "1.6" or k == 3]
+         for k in range(3, 6) if (v, drag) == ("2", "_drag") or k == 3 or (v, k, drag) == ("1.6", 4, "_drag")]
         + [("ar4_mp_tall_u_over_umf2.9_r3", "ar4_r3"), ("ar4_mp_drag_tall_u_over_umf2.9_r3", "ar4_r3"),
            ("ar1_u_over_umf2.3_r3", "ar1_r3"),
            ("ar1_tall_u_over_umf2.9_r3", "ar1_r3")])
@@ -2166,8 +2168,9 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
     queue = _Queue(study.runs, 2)
     ended, first = queue.take(0)
-    assert ended == [] and [r.name for r in first] == ["ar1_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r1"]  # 20 s
-    assert queue.take(2) == ([], []) and len(queue) == 136
+    # the study file's priority 1 (AR-4 MP at 1.6 Umf) first, first replica before second
+    assert ended == [] and [r.name for r in first] == ["ar4_mp_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r2"]
+    assert queue.take(2) == ([], []) and len(queue) == 134
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
@@ -2176,7 +2179,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 134
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 132
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
