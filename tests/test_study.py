@@ -1859,7 +1859,7 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     # and, for the bed expansion at 1.6 and 1.7 Umf alone, AR-1 and AR-4 MP cut short after its window (5 s) from
     # beds of their own: two replicas of AR-1, four of AR-4 MP (the campaign's spreads: 0.01-0.09 and 0.45-0.66),
     # at 1.7 twelve of AR-1 and eighteen of AR-4 MP, at 2.0 three of AR-4 MP; and the findings' plans at least
-    # cost: at 1.6 Umf AR-4 MP to three (at priority 1) and MP drag only to four, AR-4 MP cut short to five, at 2.0
+    # cost: at 1.6 Umf AR-4 MP to three and MP drag only to four (at priority 1), AR-4 MP cut short to five, at 2.0
     # AR-4 MP to three and drag only to five, AR-4 MP and MP drag only at 2.9 in the tall column, AR-1 at 2.3 and at
     # 2.9 in the tall column to three; then, a
     # tranche at priority -1 for the differences at 2.0 and 2.9 Umf, runs that end when they mix from beds of their
@@ -1875,7 +1875,8 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
                                    for k in range(1, n + 1)]
                    for f, v, n in (("1_t95", 2.0, 8), ("4_mp_t95", 2.0, 6), ("4_mp_drag_t95", 2.0, 4),
                                    ("1_tall_t95", 2.9, 6), ("4_mp_tall_t95", 2.9, 4), ("4_mp_drag_tall_t95", 2.9, 4))}
-    assert {r.name for r in study.runs if r.priority == 1} == {f"ar4_mp_u_over_umf1.6_r{k}" for k in (1, 2, 3)}
+    assert {r.name for r in study.runs if r.priority == 1} == {f"ar4_mp{drag}_u_over_umf1.6_r{k}" for drag in ("", "_drag")
+                                                               for k in range(1, 4 + (drag != ""))}
     assert {r.priority for r in study.runs if not r.family.endswith("_t95") and r.priority != 1} == {0}
     listed = {e["name"]: e["stop_after_mixed"] for e in write_index(tmp_path, study)["runs"]}  # for --status
     assert listed["ar1_t95_u_over_umf2_r1"] == 0.0 and listed["ar1_u_over_umf2_r1"] == 2.0
@@ -2168,8 +2169,8 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     study = load_study(ROOT / "studies" / "mema2020_stage2.toml", tmp_path)
     queue = _Queue(study.runs, 2)
     ended, first = queue.take(0)
-    # the study file's priority 1 (AR-4 MP at 1.6 Umf) first, first replica before second
-    assert ended == [] and [r.name for r in first] == ["ar4_mp_u_over_umf1.6_r1", "ar4_mp_u_over_umf1.6_r2"]
+    # the study file's priority 1 (AR-4 MP and drag only at 1.6 Umf) first, first replicas before second ones
+    assert ended == [] and [r.name for r in first] == ["ar4_mp_u_over_umf1.6_r1", "ar4_mp_drag_u_over_umf1.6_r1"]
     assert queue.take(2) == ([], []) and len(queue) == 134
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
