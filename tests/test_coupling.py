@@ -230,9 +230,8 @@ def test_fixed_bed_pressure_drop_equals_the_force_on_its_particles(tmp_path):
     sim = fvdem.Simulation(case)
     sim.gas.solver.tolerance = 1e-11
     sim.run(1.0)
-    s, mesh, gas = sim.gas.solver, sim.gas.mesh, sim.gas
+    s, mesh = sim.gas.solver, sim.gas.mesh
     area = 0.04 * 0.04
-    z = mesh.cell_centers[:, 2]
     # inlet face pressure (as the solver's gradient takes it) minus the outlet's 0
     drop = s.inlet_pressure()
     gas_weight = RHO * 9.81 * (s.voidage * mesh.cell_volumes).sum()

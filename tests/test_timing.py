@@ -3,8 +3,6 @@ to no more than the run's wall time, and a resumed run continues the table."""
 import subprocess
 import sys
 
-import pytest
-
 import fvdem
 from fvdem.case import case_from_dict
 from fvdem.timing import PHASES

@@ -45,7 +45,6 @@ import numpy as np
 import fvdem
 from fvdem.scenes.observables import weight_per_area
 from fvdem.case import case_from_dict
-from fvdem.dem.system import SimulationError
 from validate_umf import SETTINGS, reduced_bed_table
 
 # Error budget of the defaults (docs/speed-accuracy.md): the pressure drop within issue 5's 3 % plateau
