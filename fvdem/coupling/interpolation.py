@@ -46,7 +46,11 @@ def interpolate(mesh, field, points):
 # --------------------------------------------------------------------------- particle <-> cell weights
 
 
-@njit(cache=True, inline="always")
+# The two axis helpers are called, not inlined by numba (``inline="always"``): ``particle_weights`` calls them
+# at 18 sites, and numba's passes over its parallel loop then took 50 s of a first run's compilation, against 14 s
+# called (LLVM inlines them where it pays); the same weights bit for bit, and the same speed within 2-7 %
+# either way (the rods' map faster, the spheres' slower by 1-1.5 ns a particle; docs/benchmarks.md).
+@njit(cache=True)
 def _axis_span(coordinate, first_centre, spacing, n, periodic, kernel):
     """Lower and upper cell index along one axis and the upper one's weight: the cell holding the point
     (``NEAREST``; weight 0) or the two centres around it (``TRILINEAR``); beyond the outermost centres of a
@@ -68,7 +72,7 @@ def _axis_span(coordinate, first_centre, spacing, n, periodic, kernel):
     return i0, i0 + 1, t - i0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _axis_weights(coordinate, first_centre, spacing, n, periodic, kernel):
     """``_axis_span`` with the indices wrapped on a periodic axis."""
     lo, hi, w = _axis_span(coordinate, first_centre, spacing, n, periodic, kernel)
