@@ -1875,8 +1875,8 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
                                    for k in range(1, n + 1)]
                    for f, v, n in (("1_t95", 2.0, 8), ("4_mp_t95", 2.0, 6), ("4_mp_drag_t95", 2.0, 4),
                                    ("1_tall_t95", 2.9, 6), ("4_mp_tall_t95", 2.9, 4), ("4_mp_drag_tall_t95", 2.9, 4))}
-    assert {r.name for r in study.runs if r.priority == 1} == {f"ar4_mp{drag}_u_over_umf1.6_r{k}" for drag in ("", "_drag")
-                                                               for k in range(1, 4 + (drag != ""))}
+    assert {r.name for r in study.runs if r.priority == 1} == {
+        f"ar4_mp{drag}_u_over_umf1.6_r{k}" for drag in ("", "_drag") for k in range(1, 4 + (drag != ""))}
     assert {r.priority for r in study.runs if not r.family.endswith("_t95") and r.priority != 1} == {0}
     listed = {e["name"]: e["stop_after_mixed"] for e in write_index(tmp_path, study)["runs"]}  # for --status
     assert listed["ar1_t95_u_over_umf2_r1"] == 0.0 and listed["ar1_u_over_umf2_r1"] == 2.0
@@ -2264,10 +2264,13 @@ def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path):
     assert short not in _fitting(archive, study.runs, time.time() + wall[short] + 30.0, 2, study.beds)
     assert short in _fitting(archive, study.runs, time.time() + wall[short] + 40.0, 2, study.beds)
     shortest = min((n for n in left if n in {r.name for r in study.runs if r.priority == 0}), key=left.get)
-    queue = _Queue([r for r in study.runs if r.name in left], 1, fits=lambda runs: {shortest})
+    # within one tier (the study file's priority 1, and the top tier a run in progress joins, set aside: priorities
+    # rank above the deadline, test_a_lower_priority_tranche_starts_only_once_the_runs_queued_before_it_have_started)
+    flat = [replace(r, priority=0) for r in study.runs if r.name in left]
+    queue = _Queue(flat, 1, fits=lambda runs: {shortest})
     assert [r.name for r in queue.take(0)[1]] == [shortest]  # before every run in progress or longer
-    plain = _Queue([r for r in study.runs if r.name in left], 1)
-    nothing = _Queue([r for r in study.runs if r.name in left], 1, fits=lambda runs: set())
+    plain = _Queue(flat, 1)
+    nothing = _Queue(flat, 1, fits=lambda runs: set())
     assert [r.name for r in nothing.take(0)[1]] == [r.name for r in plain.take(0)[1]]  # none fits: as without
 
 
