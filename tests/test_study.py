@@ -1891,8 +1891,9 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
                      for f, n in (("1", {1.6: 2, 1.7: 11}), ("4_mp", {1.6: 6, 1.7: 17, 2.0: 3})) for v in n
                      for k in range(1, n[v] + 1)}
     assert sorted((r.name, r.bed) for r in study.runs if r.replica > 2 and "expansion" not in r.name) == sorted(
-        [(f"ar4_mp{drag}_u_over_umf{v}_r{k}", f"ar4_r{k}") for drag in ("", "_drag") for v in ("1.6", "2")
-         for k in range(3, 6) if (v, drag) == ("2", "_drag") or k == 3 or (v, k, drag) == ("1.6", 4, "_drag")]
+        [(f"ar4_mp{drag}_u_over_umf{v}_r{k}", f"ar4_r{k}")
+         for (drag, v), last in {("", "1.6"): 3, ("_drag", "1.6"): 4, ("", "2"): 3, ("_drag", "2"): 5}.items()
+         for k in range(3, last + 1)]
         + [("ar4_mp_tall_u_over_umf2.9_r3", "ar4_r3"), ("ar4_mp_drag_tall_u_over_umf2.9_r3", "ar4_r3"),
            ("ar1_u_over_umf2.3_r3", "ar1_r3"),
            ("ar1_tall_u_over_umf2.9_r3", "ar1_r3")])
@@ -2263,7 +2264,7 @@ def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path):
     assert settle["ar4_expansion"] == pytest.approx(90.0)  # bed_ar4.toml's settled bed
     assert short not in _fitting(archive, study.runs, time.time() + wall[short] + 30.0, 2, study.beds)
     assert short in _fitting(archive, study.runs, time.time() + wall[short] + 40.0, 2, study.beds)
-    shortest = min((n for n in left if n in {r.name for r in study.runs if r.priority == 0}), key=left.get)
+    shortest = min((n for n in left if n in names), key=left.get)
     # within one tier (the study file's priority 1, and the top tier a run in progress joins, set aside: priorities
     # rank above the deadline, test_a_lower_priority_tranche_starts_only_once_the_runs_queued_before_it_have_started)
     flat = [replace(r, priority=0) for r in study.runs if r.name in left]
