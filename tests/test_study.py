@@ -1081,6 +1081,66 @@ def test_points_tables_add_replicas_where_two_lie_within_their_spread_and_leave_
         ('"gas.u_over_umf" = 2.0\nreplica = 2', "points[0].replica", "did you mean")))
 
 
+def test_the_plan_of_the_open_findings_adds_the_replicas_they_ask_less_those_counted_and_on_the_way(tmp_path):
+    """``plan_points`` (the report's plan.toml): AR-4 MP at 2 Umf 4.3 s (4.0, 4.6) against AR-1's 4.35 (4.0, 4.7)
+    lies within the spread; the finding's plan (``_replicas_to_tell``, kept in findings.json as data) asks 12 of
+    AR-4 MP and 14 of AR-1 in all. The study has two of AR-1 and three of AR-4 MP there (the third not started):
+    the tables raise them to 2 + 12 = 14 and 3 + (12 - 2 - 1) = 12, and appended to the study file they give
+    exactly those runs, the earlier ones under their names."""
+    from fvdem.study.mema2020 import _replicas_to_tell, check_findings, plan_points
+
+    def row(family, t95, replica, status="finished"):
+        return {"family": family, "status": status, "gas.u_over_umf": 2.0, "t95": t95, "replica": replica,
+                "simulated_seconds": 8.0 if t95 else None}
+    rows = [row("ar1", 4.0, 1), row("ar1", 4.7, 2), row("ar4_mp", 4.0, 1), row("ar4_mp", 4.6, 2),
+            row("ar4_mp", None, 3, status="pending")]
+    finding = check_findings(rows)[0]
+    var = [0.18, 0.245]  # the sample variances of AR-4 MP's and AR-1's t95
+    plan = _replicas_to_tell([(2, var[0], None), (2, var[1], None)], 4.3 - 4.35, 0.435)
+    assert plan == [12, 14] and finding["verdict"] == "open"
+    assert finding["plans"] == [{"kind": "t95", "core_hours": None, "runs": [
+        {"family": "ar4_mp", "u_over_umf": 2.0, "replicas": 12, "now": 2, "cpu_seconds": None},
+        {"family": "ar1", "u_over_umf": 2.0, "replicas": 14, "now": 2, "cpu_seconds": None}]}]
+    text = plan_points(rows, check_findings(rows), "s")
+    assert "12 of ar4_mp at 2 Umf in all (now 2, 1 on the way)" in text
+    mp = (f'[families.ar4_mp]\ncase = "{ROOT / "cases" / "demo.toml"}"\nbed = "small"\n'
+          'set = {"particles.count" = 150}\n\n')
+    study = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/').replace("[axes]", mp + "[axes]")
+    study = (study.replace("replicas = 1", "replicas = 2")
+             + '\n[[points]]\nfamily = "ar4_mp"\n"gas.u_over_umf" = 2.0\nreplicas = 3\n')
+    path = tmp_path / "study.toml"
+    path.write_text(study)
+    before = {r.name for r in load_study(path, tmp_path / "out").runs}
+    path.write_text(study + text)
+    after = load_study(path, tmp_path / "out").runs
+    at_2 = {f: sum(r.family == f and r.point["gas.u_over_umf"] == 2.0 for r in after) for f in ("ar1", "ar4_mp")}
+    assert at_2 == {"ar1": 14, "ar4_mp": 12} and before <= {r.name for r in after}
+    # decided (single runs 25 % apart), a finding plans nothing
+    assert "plans" not in check_findings([row("ar1", 4.0, 1), row("ar4_mp", 3.0, 1)])[0]
+
+
+def test_a_plans_replicas_are_of_the_cheapest_family_that_counts_in_the_column_the_study_runs():
+    """A t95 finding's replicas of AR-1 at 2 Umf are of ar1_t95 where the study runs it there (they end when they
+    mix), at 2.9 of ar1_tall_t95 (the taller column stands for the paper's there), at 1.6 of ar1 itself; the bed
+    expansion's of ar1_expansion; a run cut short after the expansion window counts for no t95 finding, nor one
+    that ends when it mixes for the expansion; and the runs on their way are counted in the column that
+    stands."""
+    from fvdem.study.mema2020 import EXPANSION_KIND, T95, _on_the_way, _plan_base, _plan_family
+    present = {("ar1", 2.0): 2, ("ar1_t95", 2.0): 8, ("ar1", 2.9): 1, ("ar1_tall", 2.9): 3,
+               ("ar1_tall_t95", 2.9): 6, ("ar1", 1.6): 2, ("ar1_expansion", 1.7): 11, ("ar1", 1.7): 2}
+    assert [_plan_family("ar1", v, T95, present) for v in (2.0, 2.9, 1.6, 1.7)] == [
+        "ar1_t95", "ar1_tall_t95", "ar1", "ar1"]
+    assert _plan_family("ar1", 1.7, EXPANSION_KIND, present) == "ar1_expansion"
+    assert _plan_family("ar4_mp", 2.0, T95, present) is None
+    assert [_plan_base(f, T95) for f in ("ar1_tall_t95", "ar1_expansion", "ar1_tall", "ar1_t95")] == [
+        "ar1", None, "ar1", "ar1"]
+    assert [_plan_base(f, EXPANSION_KIND) for f in ("ar1_t95", "ar1_expansion", "ar1")] == [None, "ar1", "ar1"]
+    rows = [{"family": f, "gas.u_over_umf": 2.9, "status": status, "t95": t95} for f, status, t95 in (
+        ("ar1", "pending", None), ("ar1_tall", "running", 2.6), ("ar1_tall", "running", None),
+        ("ar1_tall_t95", "pending", None), ("ar1_tall_t95", "finished", 2.5))]
+    assert _on_the_way(rows, "ar1", 2.9, T95) == 2  # the paper's column's run set aside, the mixed one counted
+
+
 def test_a_lower_priority_tranche_starts_only_once_the_runs_queued_before_it_have_started(tmp_path):
     """``priority`` (a family's, or a [[points]] table's): a run of a lower tier is handed on only once every
     run of the tiers above has been, whatever its replica and even where it fits a deadline and they do not;
@@ -1601,6 +1661,12 @@ def test_the_findings_page_shows_a_findings_note_beside_its_numbers():
     page = findings_page("t", rows, [{"finding": "expands more", "verdict": "open", "values": {"1.6": 1.63},
                                       "why": "1.6 Umf within the replicas' spread", "rule": "r"}], [])
     assert "| expands more | open | 1.6: 1.63; 1.6 Umf within the replicas' spread | r |" in page
+    # the runs that would decide the open findings (the report's plan.toml), in full; none where all are decided
+    plan = '# t: the replicas\n[[points]]\nfamily = "ar1"\n"gas.u_over_umf" = 1.6\nreplicas = 3\n'
+    page = findings_page("t", rows, [{"finding": "expands more", "verdict": "open", "why": "w"}], [], plan)
+    assert "## What would decide the open findings" in page and f"```toml\n{plan}```" in page
+    page = findings_page("t", rows, [{"finding": "expands more", "verdict": "holds"}], [], plan)
+    assert "would decide" not in page
 
 
 def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_the_run_folders(tmp_path):
@@ -1626,6 +1692,7 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     # the findings as a page to read: where the study stands, one row per finding with its verdict, the figures
     page = (out / "findings.md").read_text()
     assert out / "findings.md" in written and page.startswith("# t: findings\n")
+    assert out / "plan.toml" in written and (out / "plan.toml").read_text().startswith("# t: the replicas that would")
     assert f"2 of 2 runs at their end, 0 on the way, 0 not started; {len(findings)} findings: " in page
     counts = {v: sum(f["verdict"] == v for f in findings) for v in ("holds", "does not hold", "open")}
     said = {"holds": "hold", "does not hold": "do not hold", "open": "open"}  # verbs agree with their counts

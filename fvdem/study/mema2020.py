@@ -446,11 +446,33 @@ def _to_tell(plan: list | None, series=(), how: str = "[[points]]") -> str:
         return f"more replicas would tell: {how}"
     names = [f"{n} of {name}" for n, (name, _, _) in zip(plan, series)]
     now = [str(count) for _, count, _ in series]
-    costs = [cost for _, _, cost in series]
-    hours = (sum((n - count) * cost for n, (_, count, cost) in zip(plan, series)) / 3600.0
-             if all(cost is not None for cost in costs) else None)
+    hours = _core_hours(plan, [count for _, count, _ in series], [cost for _, _, cost in series])
     return (f"about {_and(names)} in all would tell (now {_and(now)}), if the means and spread stay: {how}"
             + ("" if hours is None else f"; about {hours:.3g} core-hours at their runs' cost so far"))
+
+
+def _core_hours(plan: list, counts: list, costs: list) -> float | None:
+    """The core-hours of the replicas a plan adds (``plan``: in all; ``counts``: so far; ``costs``: a replica's CPU
+    seconds of each), None where a cost is unknown."""
+    if any(cost is None for cost in costs):
+        return None
+    return sum((n - count) * cost for n, count, cost in zip(plan, counts, costs)) / 3600.0
+
+
+# the runs a finding's plan adds (``_plan_record``'s ``kind``, ``plan_points``): of the t95 findings (whole runs,
+# or "<family>_t95"'s, which end when they mix), of the bed expansion (whole runs, or "<family>_expansion"'s, cut
+# short after its window), of the void fractions (whole runs alone)
+T95, EXPANSION_KIND, WHOLE = "t95", "expansion", "whole"
+
+
+def _plan_record(plan: list, runs: list, kind: str) -> dict:
+    """A finding's plan as data (``findings.json``'s ``plans``, which ``plan_points`` turns into ``[[points]]``):
+    ``plan`` (``_replicas_to_tell``'s counts in all) for ``runs``, ``(family, U/Umf, runs so far, a replica's CPU
+    seconds there or None)`` each; ``kind``: the runs that count there (``PLAN_KINDS``)."""
+    hours = _core_hours(plan, [count for _, _, count, _ in runs], [cost for *_, cost in runs])
+    return {"kind": kind, "core_hours": hours, "runs": [
+        {"family": family, "u_over_umf": v, "replicas": n, "now": count, "cpu_seconds": cost}
+        for n, (family, v, count, cost) in zip(plan, runs)]}
 
 
 def _and(items: list) -> str:
@@ -471,19 +493,23 @@ def _replica_cost(rows, family: str, v, column: str | None = None) -> float | No
 
 
 def _untold(v, a: list, b: list, gap: float, pair: str, names: tuple, alike: bool = True, how: str = "[[points]]",
-            costs: tuple = (None, None), bounded: bool = False) -> str | None:
+            costs: tuple = (None, None), bounded: bool = False, plans: list | None = None,
+            kind: str = T95) -> str | None:
     """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
     cannot be told: within the replicas' spread (``_within_spread``; ``pair`` names the two families), with how
     many replicas of each (``names``) would tell it at the least cost (``costs``: a replica's CPU seconds of each
     there, ``_replica_cost``; ``how``: the study file's way to add them) or, where ``alike`` (the values' likeness
     is told: ``_alike``), their likeness (``_replicas_to_tell``; ``bounded``: ``a``'s mean a lower bound at or
-    above ``b``'s, its likeness one-sided); or within ``CLOSE`` without replicas. None where it can."""
+    above ``b``'s, its likeness one-sided), the plan also appended to ``plans`` as data (``_plan_record``, of runs
+    of ``kind``); or within ``CLOSE`` without replicas. None where it can."""
     spread = _within_spread(a, b)
     if spread:
         var, means = _variances(a, b), [sum(x) / len(x) for x in (a, b)]
         series = list(zip(names, (len(a), len(b)), costs))
         plan = var and _replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, var)],
                                          means[0] - means[1], CLOSE * max(means) if alike else None, bounded)
+        if plan and plans is not None:
+            plans.append(_plan_record(plan, [(name, v, count, cost) for name, count, cost in series], kind))
         return f"{v:g} Umf within the replicas' spread ({pair}: {spread}; {_to_tell(plan, series, how)})"
     if gap < CLOSE and max(len(a), len(b)) < 2:
         return f"{v:g} Umf within {100 * CLOSE:.0f} % without replicas (too noisy to tell)"
@@ -514,12 +540,12 @@ def _compare_binarity(rows) -> dict:
     common = sorted(v for v, fam in by.items() if v is not None and len(fam) == 2)
     if not common:
         return {"finding": claim, "verdict": "open", "why": "no velocity where AR-1 and AR-4 MP both have gas snapshots"}
-    values, close, told = {}, [], {}
+    values, close, told, plans = {}, [], {}, []
     for v in common:
         a, b = (sum(by[v][f]) / len(by[v][f]) for f in ("ar1", "ar4_mp"))
         values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
         untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], _gap(a, b), "AR-1 against AR-4 MP", names=("ar1", "ar4_mp"),
-                         costs=tuple(_replica_cost(rows, f, v) for f in ("ar1", "ar4_mp")))
+                         costs=tuple(_replica_cost(rows, f, v) for f in ("ar1", "ar4_mp")), plans=plans, kind=WHOLE)
         alike = untold and _alike(by[v]["ar1"], by[v]["ar4_mp"])
         if alike:  # alike within the noise: AR-1's not more binary
             told[v], values[f"{v:g}"]["alike"] = False, alike
@@ -531,18 +557,20 @@ def _compare_binarity(rows) -> dict:
             f"the replicas apart by more than t standard errors ({_margin_words()}; within {100 * CLOSE:.0f} % "
             f"without replicas: too noisy); one velocity where AR-1's is told lower, or alike (within "
             f"{100 * CLOSE:.0f} % with t standard errors), decides")
-    return _at_every_velocity(claim, told, close, values, rule)
+    return _at_every_velocity(claim, told, close, values, rule, plans)
 
 
-def _at_every_velocity(claim: str, told: dict, untold: list, values: dict, rule: str) -> dict:
+def _at_every_velocity(claim: str, told: dict, untold: list, values: dict, rule: str, plans=()) -> dict:
     """The verdict of a claimed order at every velocity both families ran: ``told`` (velocity -> whether the
     order holds there, where it could be told), ``untold`` (the velocities within the noise, as text). One
     velocity where it is told not to hold decides ``does not hold``, whatever the others leave open; else any
-    untold velocity leaves it open; else it holds."""
+    untold velocity leaves it open (with ``plans``, the replicas that would tell them as data, ``_plan_record``);
+    else it holds."""
     if not all(told.values()):
         return {"finding": claim, "verdict": "does not hold", "values": values, "rule": rule}
     if untold:
-        return {"finding": claim, "verdict": "open", "why": "; ".join(untold), "values": values, "rule": rule}
+        return {"finding": claim, "verdict": "open", "why": "; ".join(untold), "values": values, "rule": rule,
+                **({"plans": list(plans)} if plans else {})}
     return {"finding": claim, "verdict": "holds", "values": values, "rule": rule}
 
 
@@ -592,7 +620,7 @@ def _compare(rows, faster, slower, velocities, claim):
     common = sorted(v for v in set(a) & set(b) if velocities(v))
     if not common:
         return {"finding": claim, "verdict": "open", "why": f"no velocity where both {faster} and {slower} ran"}
-    values, why, faster_at = {}, [], {}
+    values, why, faster_at, plans = {}, [], {}, []
     counted = {f: _counted(rows, f) for f in (faster, slower)}  # read once, not per velocity
     for v in common:
         (low_a, unmixed_a), (low_b, unmixed_b) = a[v], b[v]
@@ -615,7 +643,7 @@ def _compare(rows, faster, slower, velocities, claim):
             faster_at[v], gap = order
             untold = _untold(v, entropy[faster], entropy[slower], gap, f"neither mixed: {faster} against {slower}, "
                              f"mixing entropy at their end, {ends[faster][0]:g} s", alike=False, names=pair,
-                             costs=tuple(_replica_cost(rows, f, v) for f in pair))
+                             costs=tuple(_replica_cost(rows, f, v) for f in pair), plans=plans)
             if untold:  # never alike (``_alike``): near its ceiling 10 % of the entropy spans nearly to fully mixed
                 why.append(untold)
                 del faster_at[v]
@@ -628,7 +656,7 @@ def _compare(rows, faster, slower, velocities, claim):
         bounded = mean_a is None and mean_b is not None  # faster's mean a bound at or above slower's (``_alike``)
         untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]",
                          names=(faster, slower), costs=tuple(_replica_cost(rows, f, v) for f in (faster, slower)),
-                         bounded=bounded)
+                         bounded=bounded, plans=plans)
         # alike within the noise: not faster; where only ``faster``'s mean is a bound (at or above the other's, as
         # here), not below by 10 % is told as well; ``slower``'s bound would bound the wrong side
         alike = untold and mean_b is not None and _alike(counted[faster][v], counted[slower][v], bounded)
@@ -642,7 +670,7 @@ def _compare(rows, faster, slower, velocities, claim):
             f"alike (the difference with t standard errors within {100 * CLOSE:.0f} % of the larger mean t95) is not "
             "faster; where neither mixed by the same end, the higher mean mixing entropy there mixes faster (Figs. 3, "
             "9 a)")
-    return _at_every_velocity(claim, faster_at, why, values, rule)
+    return _at_every_velocity(claim, faster_at, why, values, rule, plans)
 
 
 def _entropy_order(entropy: dict, ends: dict) -> tuple | None:
@@ -785,7 +813,7 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
     error = {v: _difference_error(counted[slow][v], counted[fast][v]) for v in (top, *low)}
     var = {v: _variances(counted[slow][v], counted[fast][v]) for v in (top, *low)}  # None: no spread known
     dfs = {v: _degrees(counted[slow][v], counted[fast][v]) or math.inf for v in (top, *low)}  # inf: the CLOSE rule
-    gaps, told, untold = {}, {}, []
+    gaps, told, untold, plans = {}, {}, [], []
     for v in low:
         difference = a[v][0] - b[v][0]  # exact, or a lower (slow unmixed) or upper (fast unmixed) bound
         bound = difference if a[v][1] else -difference if b[v][1] else None  # a lower bound of the size, if > 0
@@ -808,6 +836,9 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
             spreads_of = [s for x in (v, top) for s in var[x]] if spreads else []
             plan = _replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, spreads_of)],
                                      abs(difference) - gap, margin) if spreads else None
+            if plan:
+                plans.append(_plan_record(plan, [(f, x, count, cost) for (x, f), (_, count, cost) in zip(
+                    [(x, f) for x in (v, top) for f in (slow, fast)], series)], T95))
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
                           f"{top:g} Umf, within {_errors(k)} of their difference ({noise:.3g} s; "
                           f"{_to_tell(plan, series)})")
@@ -823,7 +854,7 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
             f"without replicas, {100 * CLOSE:.0f} % of the larger t95 for {SPREAD:g} errors); sizes alike (their "
             f"difference with t errors within {100 * CLOSE:.0f} % of the larger t95, spreads known) did not shrink; "
             "where a run there did not mix, its bound decides only where it exceeds that size so")
-    return _at_every_velocity(claim, told, untold, values, rule)
+    return _at_every_velocity(claim, told, untold, values, rule, plans)
 
 
 EXPANSION = "_expansion"  # a family "<name>_expansion": <name>'s runs cut short after the bed-expansion window
@@ -876,7 +907,7 @@ def _expansion(rows) -> dict:
     common = sorted(set(a) & set(b))
     if not common:
         return {"finding": claim, "verdict": "open", "why": "no velocity where AR-1 and AR-4 MP both ran to their end"}
-    values, why, told = {}, [], {}
+    values, why, told, plans = {}, [], {}, []
     for v, family in roof:
         if v not in a or v not in b:
             why.append(f"{v:g} Umf: {family}'s bed top stood at the outlet (particles pinned at the roof), its "
@@ -887,7 +918,8 @@ def _expansion(rows) -> dict:
         untold = _untold(v, a[v], b[v], _gap(ma, mb), "AR-4 MP against AR-1",
                          how=f"[[points]] of ar4_mp{EXPANSION} and ar1{EXPANSION}, runs cut short after the window",
                          names=("ar4_mp", "ar1"),
-                         costs=tuple(_replica_cost(rows, f, v, f + EXPANSION) for f in ("ar4_mp", "ar1")))
+                         costs=tuple(_replica_cost(rows, f, v, f + EXPANSION) for f in ("ar4_mp", "ar1")),
+                         plans=plans, kind=EXPANSION_KIND)
         alike = untold and _alike(a[v], b[v])
         if alike:  # alike within the noise: AR-4's does not expand more
             told[v], values[f"{v:g}"]["alike"] = False, alike
@@ -902,7 +934,7 @@ def _expansion(rows) -> dict:
             "decides; a bed whose top stood at the outlet for half the window or more is left out (its height is the "
             f"outlet's); the runs of a family \"<family>{EXPANSION}\" (<family>'s case from other beds, cut short "
             "after the window) count as <family>'s")
-    finding = _at_every_velocity(claim, told, why, values, rule)
+    finding = _at_every_velocity(claim, told, why, values, rule, plans)
     dense = _dense_bed_note(measured)
     return {**finding, "note": dense} if dense else finding
 
@@ -1163,6 +1195,106 @@ def check_findings(rows) -> list:
     return findings
 
 
+def _plan_suffixes(kind: str) -> tuple:
+    """The family suffix of the cheaper runs that count for a plan of ``kind`` (``T95_ONLY``, ``EXPANSION``), if
+    any, and the suffixes whose runs do not count for it."""
+    cheap = {T95: (T95_ONLY,), EXPANSION_KIND: (EXPANSION,), WHOLE: ()}[kind]
+    return cheap, tuple(x for x in (T95_ONLY, EXPANSION) if x not in cheap)
+
+
+def _column_of(family: str, kind: str) -> str:
+    """``family`` without the suffix of the cheaper runs that count for ``kind`` ("ar4_mp_tall_t95":
+    "ar4_mp_tall")."""
+    cheap, _ = _plan_suffixes(kind)
+    return family[:-len(cheap[0])] if cheap and family.endswith(cheap[0]) else family
+
+
+def _plan_base(family: str, kind: str) -> str | None:
+    """The family a run of ``family`` counts as in a finding of ``kind`` ("ar4_mp_tall_t95" as "ar4_mp" in a t95
+    finding), or None where it does not count (a run cut short after the expansion window, in a t95 finding)."""
+    if family.endswith(_plan_suffixes(kind)[1]):
+        return None
+    column = _column_of(family, kind)
+    return column[:-len(TALL)] if column.endswith(TALL) else column
+
+
+def _plan_family(base: str, v, kind: str, present: dict) -> str | None:
+    """The study family that the replicas a plan adds to ``base`` at U/Umf ``v`` would be of: the cheapest that
+    counts for ``kind`` and the study runs there (``present``: ``{(family, U/Umf): replicas}``), in the taller
+    column where the study runs ``base`` in one there (``_tall_columns``); None where none runs there."""
+    cheap, _ = _plan_suffixes(kind)
+    tall = any((base + TALL + suffix, v) in present for suffix in ("", *cheap))
+    column = base + TALL if tall else base
+    return next((column + suffix for suffix in (*cheap, "") if (column + suffix, v) in present), None)
+
+
+def _on_the_way(rows, base: str, v, kind: str) -> int:
+    """How many of the study's runs that would count as ``base``'s at ``v`` in a finding of ``kind`` have no
+    result yet (not started, or on their way and not mixed where ``kind`` is t95), in the taller column alone
+    where the study runs ``base`` in one there."""
+    mine = [r for r in rows if r.get("gas.u_over_umf") == v and _plan_base(r["family"], kind) == base]
+    tall = [r for r in mine if _column_of(r["family"], kind).endswith(TALL)]
+    return sum(r["status"] in IN_PROGRESS and (kind != T95 or r.get("t95") is None) for r in (tall or mine))
+
+
+def plan_points(rows, findings, study: str | None = None) -> str:
+    """The ``[[points]]`` tables that would add the replicas the open findings' plans ask (``findings.json``'s
+    ``plans``, ``_replicas_to_tell``: how many of each family in all would tell a difference if the means and
+    spread stay), as TOML to append to the study file: per family and velocity, the most any finding asks, less
+    the runs counted so far and those the study already has on their way (``_on_the_way``), added to the study's
+    replicas there; each replica of the cheapest study family that counts (``_plan_family``: "<family>_t95" for
+    a t95 finding, "<family>_expansion" for the bed expansion, in the taller column where the study runs one).
+    Each table says which findings ask it and what it costs at its point's runs so far; findings open without a
+    plan (runs to lengthen, or more replicas than ``MAX_PLANNED``) are listed by name."""
+    present = {}
+    for r in rows:
+        key = (r["family"], r.get("gas.u_over_umf"))
+        present[key] = max(present.get(key, 0) + 1, r.get("replica") or 0)
+    tables, queued, lines = {}, [], []
+    for finding in findings:
+        if finding["verdict"] != "open":
+            continue
+        if not finding.get("plans"):
+            lines.append(f"# - {finding['finding']}: no replicas planned (findings.md says why it is open)")
+            continue
+        for plan in finding["plans"]:
+            for run in plan["runs"]:
+                base, v = run["family"], run["u_over_umf"]
+                way = _on_the_way(rows, base, v, plan["kind"])
+                add = run["replicas"] - run["now"] - way
+                said = (f"{finding['finding']}: {run['replicas']} of {base} at {v:g} Umf in all (now {run['now']}"
+                        + (f", {way} on the way" if way else "") + ")")
+                if add <= 0:
+                    queued.append(said)
+                    continue
+                family = _plan_family(base, v, plan["kind"], present) or base
+                table = tables.setdefault((family, v), {"from": present.get((family, v), 0), "replicas": 0,
+                                                        "cost": run["cpu_seconds"], "why": []})
+                table["replicas"] = max(table["replicas"], table["from"] + add)
+                table["why"].append(said + ("" if (family, v) in present else
+                                            f"; {family} does not run at {v:g} Umf in the study: an [[exclude]] "
+                                            "may drop it"))
+    hours = _core_hours([t["replicas"] for t in tables.values()], [t["from"] for t in tables.values()],
+                        [t["cost"] for t in tables.values()])
+    head = [f"# {study or 'study'}: the replicas that would decide the open findings if the means and spread stay",
+            "# (`fvdem study --report` from findings.json's plans; findings.md says why each is open). Append these",
+            "# tables to the study file and run it again: the last [[points]] table that matches a run sets its",
+            "# replicas, and the runs so far are kept.",
+            f"# {len(tables)} table{'' if len(tables) == 1 else 's'}"
+            + ("" if hours is None else f", about {hours:.3g} core-hours at their points' runs so far") + ": each",
+            "# velocity's plan on its own (where one velocity told against decides a finding, fewer may do)."]
+    head += [f"# - on the way already: {said}" for said in queued] + lines
+    body = []
+    for (family, v), t in sorted(tables.items(), key=lambda kv: (kv[0][0], kv[0][1])):
+        body += [""] + [f"# {why}" for why in t["why"]]
+        more = t["replicas"] - t["from"]
+        if t["cost"] is not None:
+            body.append(f"# {more} more, about {more * t['cost'] / 3600:.3g} core-hours")
+        body += ["[[points]]", f'family = "{family}"', f'"gas.u_over_umf" = {float(v)!r}',
+                 f"replicas = {t['replicas']}  # {t['from']} in the study so far"]
+    return "\n".join(head + body) + "\n"
+
+
 def _live(series) -> dict:
     """A run in progress from its time series: t95 (None if not yet mixed), and the bed pressure drop over
     W/A and its fluctuation over the second half of what it holds."""
@@ -1400,7 +1532,7 @@ def _headline(result: dict) -> str:
 register_report(StudyReport(
     "mema2020", "seed 000 (Mema et al., 2020): mixing and t95 figures, pressure drop, binarity, the paper's findings",
     run_values=lambda summary: {"t95": summary.get("t95")}, headline=_headline, live=_live, columns=_columns,
-    figures=_figures, table_figures=_table_figures, findings=check_findings,
+    figures=_figures, table_figures=_table_figures, findings=check_findings, plan=plan_points,
     archived_columns=("mixing_entropy", "lacey_index", "pressure_drop_over_weight", "bed_pressure_drop", "bed_top",
                       "rms_speed", "max_overlap_over_diameter", "gas_max_speed"),
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",

@@ -37,6 +37,7 @@ class StudyReport:
     figures: Callable[[Path, list], list] | None = None  # (study folder, runs with a time series) -> PNG paths
     table_figures: Callable[[Path, list], list] | None = None  # (study folder, the table's rows) -> PNG paths
     findings: Callable[[list], list] | None = None  # table rows -> findings.json
+    plan: Callable[[list, list, str | None], str] | None = None  # (rows, findings, study name) -> plan.toml
     archived_columns: tuple = ()  # time-series columns an archive keeps besides ``time``
     archived_summary: tuple = ()  # summary keys an archive keeps besides ``ARCHIVED_SUMMARY``
     archive_extra: Callable[[Path, Path], None] | None = None  # (run folder, its archive folder): extra files
@@ -136,22 +137,29 @@ def report(out) -> list:
     (out / "table.csv").write_text("\n".join(lines) + "\n")
     written = paths + [out / "table.csv", out / "table.json"]
     if chosen.findings:
-        findings = chosen.findings([row for row in rows if row["status"] != NOT_PLANNED])
+        planned = [row for row in rows if row["status"] != NOT_PLANNED]
+        findings = chosen.findings(planned)
         (out / "findings.json").write_text(json.dumps(findings, indent=1) + "\n")
-        (out / FINDINGS_PAGE).write_text(findings_page(result.get("study"), rows, findings, paths))
+        plan = chosen.plan(planned, findings, result.get("study")) if chosen.plan else None
+        if plan is not None:
+            (out / PLAN_FILE).write_text(plan)
+            written.append(out / PLAN_FILE)
+        (out / FINDINGS_PAGE).write_text(findings_page(result.get("study"), rows, findings, paths, plan))
         written += [out / "findings.json", out / FINDINGS_PAGE]
     return written
 
 
 FINDINGS_PAGE = "findings.md"  # the report's findings and figures as one page to read (``findings_page``)
+PLAN_FILE = "plan.toml"  # the report's [[points]] tables that would decide its open findings (``StudyReport.plan``)
 _VERDICT_ORDER = {"holds": 0, "does not hold": 1, "open": 2}
 _VERDICT_PLURAL = {"holds": "hold", "does not hold": "do not hold"}  # "2 hold", "2 do not hold"; "open" stays
 
 
-def findings_page(study, rows: list, findings: list, figures: list) -> str:
+def findings_page(study, rows: list, findings: list, figures: list, plan: str | None = None) -> str:
     """The findings as a Markdown page: where the study stands (runs at their end, on the way, not started), a
     table of each finding's verdict, the numbers it was decided on and, where it is open, why (its ``note``
-    beside them) and its rule, and the report's figures (linked by name: the page lies beside them)."""
+    beside them) and its rule, the runs that would decide the open ones (``plan``, the report's ``PLAN_FILE``)
+    and the report's figures (linked by name: the page lies beside them)."""
     ended, started, planned = _ran(rows)
     verdicts = {}
     for f in findings:
@@ -168,6 +176,10 @@ def findings_page(study, rows: list, findings: list, figures: list) -> str:
         numbers += f" ({f['note']})" if f.get("note") else ""
         lines.append("| " + " | ".join(cell.replace("|", "/") for cell in (
             f["finding"], f["verdict"], numbers, f.get("rule", ""))) + " |")
+    if plan and any(f["verdict"] == "open" for f in findings):
+        lines += ["", "## What would decide the open findings", "",
+                  f"[{PLAN_FILE}]({PLAN_FILE}), written beside this page: the replicas the open findings' plans ask, "
+                  "as `[[points]]` tables to append to the study file.", "", "```toml", plan.rstrip("\n"), "```"]
     if figures:
         lines += ["", "## Figures", "", "Drawn beside this page by `fvdem study <this folder> --report` (an archive "
                   "keeps the data they are drawn from, not the images).", ""]
