@@ -1283,7 +1283,7 @@ def plan_points(rows, findings, study: str | None = None) -> str:
             f"# {len(tables)} table{'' if len(tables) == 1 else 's'}"
             + ("" if hours is None else f", about {hours:.3g} core-hours at their points' runs so far") + ": each",
             "# velocity's plan on its own (where one velocity told against decides a finding, fewer may do)."]
-    head += [f"# - on the way already: {said}" for said in queued] + lines
+    head += [f"# - in the study already: {said}" for said in queued] + lines
     body = []
     for (family, v), t in sorted(tables.items(), key=lambda kv: (kv[0][0], kv[0][1])):
         body += [""] + [f"# {why}" for why in t["why"]]
