@@ -468,7 +468,7 @@ T95, EXPANSION_KIND, WHOLE = "t95", "expansion", "whole"
 def _plan_record(plan: list, runs: list, kind: str) -> dict:
     """A finding's plan as data (``findings.json``'s ``plans``, which ``plan_points`` turns into ``[[points]]``):
     ``plan`` (``_replicas_to_tell``'s counts in all) for ``runs``, ``(family, U/Umf, runs so far, a replica's CPU
-    seconds there or None)`` each; ``kind``: the runs that count there (``PLAN_KINDS``)."""
+    seconds there or None)`` each; ``kind``: the runs that count there (``T95``, ``EXPANSION_KIND``, ``WHOLE``)."""
     hours = _core_hours(plan, [count for _, _, count, _ in runs], [cost for *_, cost in runs])
     return {"kind": kind, "core_hours": hours, "runs": [
         {"family": family, "u_over_umf": v, "replicas": n, "now": count, "cpu_seconds": cost}
