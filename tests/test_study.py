@@ -1125,20 +1125,24 @@ def test_a_plans_replicas_are_of_the_cheapest_family_that_counts_in_the_column_t
     expansion's of ar1_expansion; a run cut short after the expansion window counts for no t95 finding, nor one
     that ends when it mixes for the expansion; and the runs on their way are counted in the column that
     stands."""
-    from fvdem.study.mema2020 import EXPANSION_KIND, T95, _on_the_way, _plan_base, _plan_family
+    from fvdem.study.mema2020 import EXPANSION_KIND, T95, _counted_as, _on_the_way, _plan_family
     present = {("ar1", 2.0): 2, ("ar1_t95", 2.0): 8, ("ar1", 2.9): 1, ("ar1_tall", 2.9): 3,
                ("ar1_tall_t95", 2.9): 6, ("ar1", 1.6): 2, ("ar1_expansion", 1.7): 11, ("ar1", 1.7): 2}
     assert [_plan_family("ar1", v, T95, present) for v in (2.0, 2.9, 1.6, 1.7)] == [
         "ar1_t95", "ar1_tall_t95", "ar1", "ar1"]
     assert _plan_family("ar1", 1.7, EXPANSION_KIND, present) == "ar1_expansion"
     assert _plan_family("ar4_mp", 2.0, T95, present) is None
-    assert [_plan_base(f, T95) for f in ("ar1_tall_t95", "ar1_expansion", "ar1_tall", "ar1_t95")] == [
-        "ar1", None, "ar1", "ar1"]
-    assert [_plan_base(f, EXPANSION_KIND) for f in ("ar1_t95", "ar1_expansion", "ar1")] == [None, "ar1", "ar1"]
+    def families(names, kind):  # the family each run counts as in a finding of ``kind`` (None: not counted)
+        counted = {r["gas.u_over_umf"]: r["family"] for r in _counted_as(
+            [{"family": f, "gas.u_over_umf": k} for k, f in enumerate(names)], kind)}
+        return [counted.get(k) if counted.get(k) == "ar1" else None for k in range(len(names))]
+    assert families(("ar1_tall_t95", "ar1_expansion", "ar1_tall", "ar1_t95"), T95) == ["ar1", None, "ar1", "ar1"]
+    assert families(("ar1_t95", "ar1_expansion", "ar1"), EXPANSION_KIND) == [None, "ar1", "ar1"]
     rows = [{"family": f, "gas.u_over_umf": 2.9, "status": status, "t95": t95} for f, status, t95 in (
         ("ar1", "pending", None), ("ar1_tall", "running", 2.6), ("ar1_tall", "running", None),
         ("ar1_tall_t95", "pending", None), ("ar1_tall_t95", "finished", 2.5))]
-    assert _on_the_way(rows, "ar1", 2.9, T95) == 2  # the paper's column's run set aside, the mixed one counted
+    # the paper's column's run set aside, the mixed one counted
+    assert _on_the_way(_counted_as(rows, T95), "ar1", 2.9, T95) == 2
 
 
 def test_a_lower_priority_tranche_starts_only_once_the_runs_queued_before_it_have_started(tmp_path):

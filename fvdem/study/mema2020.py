@@ -831,14 +831,13 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
                               f"{top:g} Umf, with {_errors(k)} ({noise:.3g} s) within "
                               f"{100 * CLOSE:.0f} % of the larger t95 ({margin:.3g} s)")
         elif bound is None:
-            series = [(f"{f} at {x:g} Umf", len(counted[f][x]), _replica_cost(rows, f, x))
-                      for x in (v, top) for f in (slow, fast)]
+            runs = [(f, x, len(counted[f][x]), _replica_cost(rows, f, x)) for x in (v, top) for f in (slow, fast)]
+            series = [(f"{f} at {x:g} Umf", count, cost) for f, x, count, cost in runs]
             spreads_of = [s for x in (v, top) for s in var[x]] if spreads else []
             plan = _replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, spreads_of)],
                                      abs(difference) - gap, margin) if spreads else None
             if plan:
-                plans.append(_plan_record(plan, [(f, x, count, cost) for (x, f), (_, count, cost) in zip(
-                    [(x, f) for x in (v, top) for f in (slow, fast)], series)], T95))
+                plans.append(_plan_record(plan, runs, T95))
             untold.append(f"{v:g} Umf: {slow} minus {fast} {abs(difference):.3g} s in size against {gap:.3g} s at "
                           f"{top:g} Umf, within {_errors(k)} of their difference ({noise:.3g} s; "
                           f"{_to_tell(plan, series)})")
@@ -1195,46 +1194,39 @@ def check_findings(rows) -> list:
     return findings
 
 
-def _plan_suffixes(kind: str) -> tuple:
-    """The family suffix of the cheaper runs that count for a plan of ``kind`` (``T95_ONLY``, ``EXPANSION``), if
-    any, and the suffixes whose runs do not count for it."""
-    cheap = {T95: (T95_ONLY,), EXPANSION_KIND: (EXPANSION,), WHOLE: ()}[kind]
-    return cheap, tuple(x for x in (T95_ONLY, EXPANSION) if x not in cheap)
+def _cheaper(kind: str) -> tuple:
+    """The family suffix of the cheaper runs that count for a plan of ``kind``, if any: "<family>_t95" for a t95
+    finding (``T95_ONLY``), "<family>_expansion" for the bed expansion (``EXPANSION``)."""
+    return {T95: (T95_ONLY,), EXPANSION_KIND: (EXPANSION,), WHOLE: ()}[kind]
 
 
-def _column_of(family: str, kind: str) -> str:
-    """``family`` without the suffix of the cheaper runs that count for ``kind`` ("ar4_mp_tall_t95":
-    "ar4_mp_tall")."""
-    cheap, _ = _plan_suffixes(kind)
-    return family[:-len(cheap[0])] if cheap and family.endswith(cheap[0]) else family
-
-
-def _plan_base(family: str, kind: str) -> str | None:
-    """The family a run of ``family`` counts as in a finding of ``kind`` ("ar4_mp_tall_t95" as "ar4_mp" in a t95
-    finding), or None where it does not count (a run cut short after the expansion window, in a t95 finding)."""
-    if family.endswith(_plan_suffixes(kind)[1]):
-        return None
-    column = _column_of(family, kind)
-    return column[:-len(TALL)] if column.endswith(TALL) else column
+def _counted_as(rows, kind: str) -> list:
+    """``rows`` as a finding of ``kind`` counts them (``check_findings``' mapping): each run under the family it
+    counts as, "<family>_t95" runs only in the t95 findings (``_t95_runs``), "<family>_expansion" runs only in the
+    bed expansion (``_expansion_runs``), a taller column's runs in place of the paper column's at their point
+    (``_tall_columns``)."""
+    if kind == T95:
+        return _tall_columns(_t95_runs(rows))[0]
+    whole = _tall_columns([r for r in rows if not r["family"].endswith(T95_ONLY)])[0]
+    return _expansion_runs(whole) if kind == EXPANSION_KIND else whole
 
 
 def _plan_family(base: str, v, kind: str, present: dict) -> str | None:
     """The study family that the replicas a plan adds to ``base`` at U/Umf ``v`` would be of: the cheapest that
     counts for ``kind`` and the study runs there (``present``: ``{(family, U/Umf): replicas}``), in the taller
     column where the study runs ``base`` in one there (``_tall_columns``); None where none runs there."""
-    cheap, _ = _plan_suffixes(kind)
+    cheap = _cheaper(kind)
     tall = any((base + TALL + suffix, v) in present for suffix in ("", *cheap))
     column = base + TALL if tall else base
     return next((column + suffix for suffix in (*cheap, "") if (column + suffix, v) in present), None)
 
 
-def _on_the_way(rows, base: str, v, kind: str) -> int:
-    """How many of the study's runs that would count as ``base``'s at ``v`` in a finding of ``kind`` have no
-    result yet (not started, or on their way and not mixed where ``kind`` is t95), in the taller column alone
-    where the study runs ``base`` in one there."""
-    mine = [r for r in rows if r.get("gas.u_over_umf") == v and _plan_base(r["family"], kind) == base]
-    tall = [r for r in mine if _column_of(r["family"], kind).endswith(TALL)]
-    return sum(r["status"] in IN_PROGRESS and (kind != T95 or r.get("t95") is None) for r in (tall or mine))
+def _on_the_way(counted, base: str, v, kind: str) -> int:
+    """How many of the study's runs that count as ``base``'s at ``v`` in a finding of ``kind`` (``counted``: the
+    study's rows as ``_counted_as`` maps them for ``kind``) have no result yet (not started, or on their way and
+    not mixed where ``kind`` is t95)."""
+    return sum(r["family"] == base and r.get("gas.u_over_umf") == v and r["status"] in IN_PROGRESS
+               and (kind != T95 or r.get("t95") is None) for r in counted)
 
 
 def plan_points(rows, findings, study: str | None = None) -> str:
@@ -1250,6 +1242,7 @@ def plan_points(rows, findings, study: str | None = None) -> str:
     for r in rows:
         key = (r["family"], r.get("gas.u_over_umf"))
         present[key] = max(present.get(key, 0) + 1, r.get("replica") or 0)
+    counted = {kind: _counted_as(rows, kind) for kind in (T95, EXPANSION_KIND, WHOLE)}
     tables, queued, lines = {}, [], []
     for finding in findings:
         if finding["verdict"] != "open":
@@ -1260,7 +1253,7 @@ def plan_points(rows, findings, study: str | None = None) -> str:
         for plan in finding["plans"]:
             for run in plan["runs"]:
                 base, v = run["family"], run["u_over_umf"]
-                way = _on_the_way(rows, base, v, plan["kind"])
+                way = _on_the_way(counted[plan["kind"]], base, v, plan["kind"])
                 add = run["replicas"] - run["now"] - way
                 said = (f"{finding['finding']}: {run['replicas']} of {base} at {v:g} Umf in all (now {run['now']}"
                         + (f", {way} on the way" if way else "") + ")")
