@@ -96,11 +96,13 @@ def test_a_run_records_what_made_it_and_logs_progress_warnings_and_timings(tmp_p
     made = summary["provenance"]
     from fvdem import __version__
     assert made["fvdem"] == __version__ and made["threads"] == 1 and made["host"] and made["date"].startswith("20")
-    assert {"numba", "numpy", "fipy", "python", "commit"} <= set(made)
+    assert {"numba", "numpy", "fipy", "python", "commit", "cpu"} <= set(made)
     header = (out / "case.toml").read_text().splitlines()[1]
     assert header.startswith(f"# made by fvdem {__version__}") and "1 thread(s)" in header
     log = (out / "run.log").read_text().splitlines()
     assert "started: demo" in log[0] and f"fvdem {__version__}" in log[0]
+    if made["cpu"]:  # the processor its CPU seconds were spent on, beside the host
+        assert f"({made['cpu']}), 1 thread(s)" in log[0] and f"({made['cpu']}), 1 thread(s)" in header
     assert sum("progress" in line for line in log) >= 8
     assert any("reached its end at t = 0.03" in line for line in log)
     assert any("Loop time of" in line for line in log) and any("contact_forces" in line for line in log)
@@ -115,3 +117,30 @@ def test_a_run_records_what_made_it_and_logs_progress_warnings_and_timings(tmp_p
     assert resumed.returncode == 0, resumed.stderr
     log = (out / "run.log").read_text()
     assert log.count("started: demo") == 1 and "resumed at t = 0.03 s: demo" in log
+
+
+def test_the_processor_a_run_records_is_read_from_cpuinfo(tmp_path, monkeypatch):
+    """provenance's ``cpu``: the first processor's model name, family and model, and the CPUs the process may
+    use; without a cpuinfo, ``platform.processor()``; None when nothing names one. ``describe`` puts it beside
+    the host, and leaves it out for a record made before fvdem recorded it."""
+    import os
+    import platform
+
+    from fvdem.provenance import cpu_model, describe
+    read = cpu_model.__wrapped__  # not the cached reading of this machine's
+    cpuinfo = tmp_path / "cpuinfo"
+    block = "processor\t: {0}\nvendor_id\t: AuthenticAMD\ncpu family\t: 26\nmodel\t\t: 2\nmodel name\t: {1}\n\n"
+    cpuinfo.write_text(block.format(0, "AMD EPYC 9B45") + block.format(1, "another"))
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    assert read(str(cpuinfo)) == "AMD EPYC 9B45 (family 26, model 2), 2 CPUs"
+    cpuinfo.write_text("processor\t: 0\nmodel name\t: ARMv8 Processor\n")  # no family: the name alone
+    assert read(str(cpuinfo)) == "ARMv8 Processor, 2 CPUs"
+    monkeypatch.setattr(platform, "processor", lambda: "arm")
+    assert read(str(tmp_path / "none")) == "arm, 2 CPUs"
+    monkeypatch.setattr(platform, "processor", lambda: "")
+    assert read(str(tmp_path / "none")) is None
+    made = {"fvdem": "0.2.0", "commit": "abc", "date": "2026-12-06", "host": "vm", "threads": 1, "python": "3.11",
+            "numpy": "2", "numba": "0.6", "fipy": "4"}
+    assert " on vm, 1 thread(s); " in describe(made)
+    assert " on vm (AMD EPYC (family 26, model 2), 2 CPUs), 1 thread(s); " in describe(
+        {**made, "cpu": "AMD EPYC (family 26, model 2), 2 CPUs"})

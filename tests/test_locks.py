@@ -134,7 +134,7 @@ def _status_folder(tmp_path) -> Path:
     rows = []
     for name, family, held, summary in (
             ("a_r1", "ar1", 5.0, {"simulated_time": 5.0, "ended": "mixed", "t95": 3.0, "cpu_seconds": 1000.0,
-                                  "peak_memory_mb": 400.0}),
+                                  "peak_memory_mb": 400.0, "provenance": {"cpu": "AMD EPYC (family 26, model 2)"}}),
             ("b_r1", "ar4", 3.0, {"simulated_time": 2.0, "stopped_early": True, "cpu_seconds": 1200.0,
                                   "peak_memory_mb": 350.0}),
             ("b_r2", "ar4", 0.0, None),
@@ -173,6 +173,8 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     assert families["ar1"]["cpu_per_simulated_second"] == pytest.approx(200.0)
     assert families["ar4"]["cpu_per_simulated_second"] == pytest.approx(600.0)
     assert families["ar4"]["left_simulated_seconds"] == pytest.approx(5.0 + 8.0 + 8.0)
+    # the processors the rates were measured on: ar1's run names its own, ar4's summary none (an older run)
+    assert status["processors"] == {"AMD EPYC (family 26, model 2)": 1, "not recorded": 1}
     assert status["left_core_hours"] == pytest.approx(21.0 * 600.0 / 3600.0)
     assert status["running"] is None and status["counts"]["ended"] == 1 and status["hours_at_running_now"] is None
     # a run a process writes now is "running", and the hours left are spread over the runs running now
@@ -194,6 +196,8 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
         assert main(["study", str(out), "--status"]) == 0
         text = capsys.readouterr().out
         assert f"b_r1 about {running['expected_end'][11:16]}" in text
+        assert ("measured on: AMD EPYC (family 26, model 2) (1 run(s)); a processor not recorded (runs made before "
+                "fvdem recorded it) (1 run(s))") in text
         assert "expected_end" not in text and "expected_cpu" not in text  # a line of their own, not table columns
     finally:
         process.send_signal(signal.SIGKILL)

@@ -1636,7 +1636,9 @@ def _fake_run(folder, family, ratio, entropy_rate, voidage):
     (folder / "summary.json").write_text(json.dumps({"simulated_time": 4.0, "wall_seconds": 100.0, "t95": None,
                                                      "bed_pressure_drop_std_second_half": 150.0,
                                                      "bed_weight_per_area": 1000.0, "pressure_drop_over_weight": 1.0,
-                                                     "provenance": {"fvdem": "x"}, "timings": {"total": 100.0}}))
+                                                     "provenance": {"fvdem": "x", "host": "vm", "threads": 1,
+                                                                    "cpu": "AMD EPYC (family 26, model 2), 2 CPUs"},
+                                                     "timings": {"total": 100.0}}))
     (folder / "run.log").write_text("started\nreached its end\n")
     (folder / "checkpoint.npz").write_bytes(b"not small in a real run")
     x, y, z = np.meshgrid(np.linspace(0, 0.15, 3), np.linspace(0, 0.15, 3), np.linspace(0, 0.6, 5), indexing="ij")
@@ -1761,6 +1763,8 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert results["study"] == "t" and results["findings"] == json.loads((dest / "findings.json").read_text())
     assert [r["name"] for r in results["runs"]] == [r["name"] for r in again] and "folder" not in results["runs"][0]
     assert results["ran"].startswith("2 of 2 runs reached their end, 0 on the way, 0 not started")
+    # the processor the runs' CPU seconds were spent on, beside their host
+    assert results["machine"]["hosts"] == ["vm (AMD EPYC (family 26, model 2), 2 CPUs, 1 thread(s) a run)"]
     assert main(["study", str(tmp_path), "--results", str(tmp_path / "r.json")]) == 2  # not a study folder
 
 

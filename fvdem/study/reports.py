@@ -384,7 +384,8 @@ def _bed_of(folder: Path) -> str | None:
 def results(out, dest) -> Path:
     """The study's results as one JSON file ``dest`` (e.g. ``docs/data/mema2020.json``), rebuilt from the
     study folder or its archive (its report first): ``study``, ``file``, ``date``, ``code`` (the commits the
-    runs ran with, short, and how many runs each), ``machine`` (hosts, threads, libraries of the runs),
+    runs ran with, short, and how many runs each), ``machine`` (hosts, their processors where recorded, threads,
+    libraries of the runs),
     ``ran`` (how many runs reached their end, how many are on the way, how many have not started), ``runs``
     (the table's rows without folders) and ``findings`` (the report's, if it has them). Returns ``dest``."""
     import datetime
@@ -402,7 +403,8 @@ def results(out, dest) -> Path:
         if made.get("commit"):
             commits[made["commit"][:7]] = commits.get(made["commit"][:7], 0) + 1
         if made.get("host"):
-            hosts.add(f"{made['host']} ({made.get('threads')} thread(s) a run)")
+            cpu = f"{made['cpu']}, " if made.get("cpu") else ""
+            hosts.add(f"{made['host']} ({cpu}{made.get('threads')} thread(s) a run)")
             libraries.add(", ".join(f"{k} {made[k]}" for k in ("fvdem", "python", "numpy", "numba", "fipy") if k in made))
     ended, started, planned = _ran(rows)
     findings = json.loads((out / "findings.json").read_text()) if (out / "findings.json").exists() else None

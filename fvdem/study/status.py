@@ -25,6 +25,8 @@ from .tasks import FAILED, NOT_PLANNED, _folder_case, _simulated_so_far, _summar
 # starts again from t = 0); nothing yet; its last attempt failed (its cause in study.json); the study file no
 # longer lists it and it has not ended (its folder kept: ``write_index``; nothing left of it is counted)
 STATES = ("ended", "running", "in progress", "partial", "not started", "failed", NOT_PLANNED)
+# the processor of a run whose summary does not name one (made before fvdem recorded it, 2026-12-06)
+UNRECORDED = "not recorded"
 
 
 def study_status(out) -> dict:
@@ -38,13 +40,16 @@ def study_status(out) -> dict:
     "runs_measured", "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
     "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
     "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
-    "unmeasured" (families left without a measured rate), "hours_at_running_now", "beds" (``_bed_status``)}``."""
+    "unmeasured" (families left without a measured rate), "hours_at_running_now", "processors" (``{processor: runs}``
+    of the runs the rates were measured on, from their provenance's ``cpu``; ``UNRECORDED`` for runs made before fvdem
+    recorded it: the same run costs 2-3 times more CPU seconds on one machine than on another),
+    "beds" (``_bed_status``)}``."""
     out = Path(out)
     index = json.loads((out / "study.json").read_text())
     chosen = report_for(index.get("report"))
     rows = [_run_status(out, r, chosen) for r in index["runs"]]
     runs = [row for row, _ in rows]
-    families = {}
+    families, processors = {}, {}
     for row, measured in rows:
         family = families.setdefault(row["family"], {"cpu_seconds": 0.0, "simulated": 0.0, "runs_measured": 0,
                                                      "peak_memory_mb": None, "left_simulated_seconds": 0.0})
@@ -52,6 +57,7 @@ def study_status(out) -> dict:
             family["cpu_seconds"] += measured[0]
             family["simulated"] += measured[1]
             family["runs_measured"] += 1
+            processors[measured[2]] = processors.get(measured[2], 0) + 1
         if row.get("peak_memory_mb") is not None:
             family["peak_memory_mb"] = max(family["peak_memory_mb"] or 0.0, row["peak_memory_mb"])
         family["left_simulated_seconds"] += row["left"]
@@ -98,6 +104,7 @@ def study_status(out) -> dict:
             "expected_core_hours": expected_hours, "unmeasured": unmeasured,
             "hours_at_running_now": (left_hours / counts["running"] if left_hours is not None and counts["running"]
                                      else None),
+            "processors": processors,
             "beds": [_bed_status(folder) for folder in sorted((out / "beds").glob("*")) if folder.is_dir()]}
 
 
@@ -226,7 +233,8 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
            "peak_memory_mb": summary.get("peak_memory_mb"), "threads": summary.get("threads"),
            **({"error": r.get("error")} if state == "failed" else {}),
            **({"writer": writer} if writer else {})}
-    return row, ((float(cpu), measured) if cpu and measured > 0 else None)
+    processor = (summary.get("provenance") or {}).get("cpu") or UNRECORDED
+    return row, ((float(cpu), measured, processor) if cpu and measured > 0 else None)
 
 
 def format_status(status: dict) -> str:
@@ -273,6 +281,12 @@ def format_status(status: dict) -> str:
                       if f["cpu_per_simulated_second"] is not None else "not measured")
         + (f", peak {f['peak_memory_mb']:.0f} MB" if f["peak_memory_mb"] is not None else "")
         for name, f in status["families"].items()))
+    processors = status.get("processors") or {}
+    if processors:
+        lines.append("measured on: " + "; ".join(
+            (cpu if cpu != UNRECORDED else "a processor not recorded (runs made before fvdem recorded it)")
+            + f" ({n} run(s))"
+            for cpu, n in sorted(processors.items(), key=lambda item: -item[1])))
     if status["left_core_hours"] is not None and status["left_simulated_seconds"] > 0:
         line = f"left: at most {status['left_core_hours']:.1f} core-hours at these rates"
         if status["unmeasured"]:
