@@ -213,6 +213,57 @@ def test_the_status_says_each_runs_state_its_values_and_the_core_hours_left(tmp_
     assert main(["study", str(tmp_path), "--status"]) == 2  # not a study folder
 
 
+def test_the_status_scales_its_rates_to_the_processor_the_study_computes_on_now(tmp_path, capsys, monkeypatch):
+    """A campaign moved to another machine (2026-12-06: a Zen 5 EPYC ran the paper's AR-4 runs at about 290 CPU s
+    per simulated second, the Zen 1 before at 650-900): the families measured there take their rate there, the
+    others their rate elsewhere times the median ratio of the families measured on both; a status read where no
+    run was measured, or a study of one processor, takes the rates as measured."""
+    import fvdem.provenance
+    from fvdem.study.status import study_status
+    out = _status_folder(tmp_path)  # a_r1 (ar1) at 200 CPU s per simulated second, b_r1 (ar4) at 600: the old machine
+    old, new = "AMD EPYC (family 23, model 1), 2 CPUs", "AMD EPYC (family 26, model 2), 2 CPUs"
+    for name, cpu, processor in (("a_r1", 1000.0, old), ("b_r1", 1200.0, old)):
+        summary = json.loads((out / "runs" / name / "summary.json").read_text())
+        summary["cpu_seconds"], summary["provenance"] = cpu, {"cpu": processor}
+        (out / "runs" / name / "summary.json").write_text(json.dumps(summary))
+    # a second ar1 run, ended on the new machine at 80 CPU s per simulated second (0.4 times the old one's 200)
+    index = json.loads((out / "study.json").read_text())
+    index["runs"].append({**index["runs"][0], "name": "a_r2", "folder": "runs/a_r2", "replica": 2})
+    (out / "study.json").write_text(json.dumps(index))
+    (out / "runs" / "a_r2").mkdir()
+    (out / "runs" / "a_r2" / "timeseries.csv").write_bytes((out / "runs" / "a_r1" / "timeseries.csv").read_bytes())
+    (out / "runs" / "a_r2" / "summary.json").write_text(json.dumps(
+        {"simulated_time": 5.0, "ended": "mixed", "t95": 3.0, "cpu_seconds": 400.0, "provenance": {"cpu": new}}))
+    monkeypatch.setattr(fvdem.provenance, "cpu_model", lambda: new)  # the study computes on the new machine now
+    status = study_status(out)
+    families = status["families"]
+    assert status["processors"] == {old: 2, new: 1} and status["processor_now"] == new
+    assert status["processor_factor"] == pytest.approx(0.4)
+    assert families["ar1"]["cpu_per_simulated_second"] == pytest.approx(140.0)  # as measured, both machines
+    assert families["ar1"]["cpu_per_simulated_second_now"] == pytest.approx(80.0)  # its own run there
+    assert families["ar4"]["cpu_per_simulated_second"] == pytest.approx(600.0)
+    assert families["ar4"]["cpu_per_simulated_second_now"] == pytest.approx(240.0)  # 600 x 0.4
+    assert status["left_core_hours"] == pytest.approx(21.0 * 240.0 / 3600.0)
+    runs = {r["name"]: r for r in status["runs"]}
+    assert runs["c_r1"]["expected_cpu_seconds_left"] == pytest.approx(runs["c_r1"]["expected_left"] * 240.0)
+    assert main(["study", str(out), "--status"]) == 0
+    text = capsys.readouterr().out
+    assert (f"the estimates below at the rates on {new}, where the study computes now: 0.4 times those elsewhere"
+            in text and ": ar1 80; ar4 240" in text)
+    # read on a third machine, or where one processor measured everything: the rates as measured
+    monkeypatch.setattr(fvdem.provenance, "cpu_model", lambda: "another")
+    status = study_status(out)
+    assert status["processor_factor"] is None and status["left_core_hours"] == pytest.approx(21.0 * 600.0 / 3600.0)
+    assert "cpu_per_simulated_second_now" not in status["families"]["ar4"]
+    (out / "runs" / "a_r2" / "summary.json").write_text(json.dumps(
+        {"simulated_time": 5.0, "ended": "mixed", "t95": 3.0, "cpu_seconds": 400.0, "provenance": {"cpu": old}}))
+    monkeypatch.setattr(fvdem.provenance, "cpu_model", lambda: old)
+    status = study_status(out)
+    assert status["processor_factor"] is None and status["families"]["ar1"]["cpu_per_simulated_second"] == 140.0
+    assert main(["study", str(out), "--status"]) == 0
+    assert "the estimates below" not in capsys.readouterr().out
+
+
 def test_the_status_says_which_beds_settle_while_the_runs_wait(tmp_path, capsys):
     """Runs in progress with none running: the study is settling beds (a campaign given new replicas, 2026-12-05,
     settled four beds for five minutes first). The status lists the beds begun in ``beds/``: settled (a final

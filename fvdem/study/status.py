@@ -2,7 +2,8 @@
 whether a study runs there now (its folder's lock: who, where, since when), each run's state (ended, running
 now, in progress from a checkpoint, not started, failed), the simulated seconds it holds against its duration
 and its report's values (seed 000's: t95, the mixing entropy it reached), the CPU seconds per simulated second
-and peak memory each family has cost so far, and what is left: simulated seconds and core-hours at those
+and peak memory each family has cost so far (and on which processors: where the study computes now on one its
+other runs did not, its rates are scaled to it), and what is left: simulated seconds and core-hours at those
 rates, at most (every run to its duration) and as expected (a run ends where the ended runs of its physics at its
 point would make it end, or ``time.stop_after_mixed`` past its t95 once it has mixed), the hours that makes at the
 runs running now, and the runs that wait at a lower priority.
@@ -36,13 +37,16 @@ def study_status(out) -> dict:
     "expected_cpu_seconds_left" (at its family's rate so far, else its kin's or the slowest family's; None before
     any), "expected_end" (a running run's, at the threads of its last summary, one without), <the report's values>,
     "cpu_per_simulated_second", "peak_memory_mb"}], "counts", "families": {family: {"cpu_per_simulated_second",
-    "rate_from" (where none is measured: the measured families of its physics whose rate it takes, ``_kin_families``),
+    "cpu_per_simulated_second_now" (where it differs: its rate on the processor the study computes on now,
+    ``_rate_now``, which the estimates take), "rate_from" (where none is measured: the measured families of its
+    physics whose rate it takes, ``_kin_families``),
     "runs_measured", "peak_memory_mb", "left_simulated_seconds", "left_core_hours", "expected_left_simulated_seconds",
     "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
     "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
     "unmeasured" (families left without a measured rate), "hours_at_running_now", "processors" (``{processor: runs}``
     of the runs the rates were measured on, from their provenance's ``cpu``; ``UNRECORDED`` for runs made before fvdem
-    recorded it: the same run costs 2-3 times more CPU seconds on one machine than on another),
+    recorded it: the same run costs 2-3 times more CPU seconds on one machine than on another), "processor_now"
+    (``_processor_now``) and "processor_factor" (``_processor_factor``; None where the rates are taken as measured),
     "beds" (``_bed_status``)}``."""
     out = Path(out)
     index = json.loads((out / "study.json").read_text())
@@ -52,25 +56,35 @@ def study_status(out) -> dict:
     families, processors = {}, {}
     for row, measured in rows:
         family = families.setdefault(row["family"], {"cpu_seconds": 0.0, "simulated": 0.0, "runs_measured": 0,
-                                                     "peak_memory_mb": None, "left_simulated_seconds": 0.0})
+                                                     "peak_memory_mb": None, "left_simulated_seconds": 0.0,
+                                                     "by_processor": {}})
         if measured is not None:
             family["cpu_seconds"] += measured[0]
             family["simulated"] += measured[1]
             family["runs_measured"] += 1
             processors[measured[2]] = processors.get(measured[2], 0) + 1
+            on = family["by_processor"].setdefault(measured[2], [0.0, 0.0])
+            on[0], on[1] = on[0] + measured[0], on[1] + measured[1]
         if row.get("peak_memory_mb") is not None:
             family["peak_memory_mb"] = max(family["peak_memory_mb"] or 0.0, row["peak_memory_mb"])
         family["left_simulated_seconds"] += row["left"]
-    slowest = max((f["cpu_seconds"] / f["simulated"] for f in families.values() if f["simulated"] > 0), default=None)
+    now_on, factor = _processor_now(rows), None
+    if now_on is not None and len(processors) > 1 and now_on in processors:
+        factor = _processor_factor(families.values(), now_on)
+    rate_now = {name: _rate_now(f, now_on, factor) for name, f in families.items()}
+    slowest = max((r for r in rate_now.values() if r is not None), default=None)
     kin = _kin_families(index["runs"])
     unmeasured, rates = [], {}  # rates: the CPU seconds per simulated second each family's runs are counted at
     for name, family in families.items():
         rate = family["cpu_seconds"] / family["simulated"] if family["simulated"] > 0 else None
-        family["cpu_per_simulated_second"] = used = rate
+        family["cpu_per_simulated_second"], used = rate, rate_now[name]
+        if used is not None and rate is not None and abs(used - rate) > 1e-9 * rate:
+            family["cpu_per_simulated_second_now"] = used
         lenders = [k for k in kin.get(name, ()) if families[k]["simulated"] > 0] if rate is None else []
         if lenders:  # a family not measured yet: the rate of those whose runs have its physics
             family["rate_from"] = lenders
-            used = (sum(families[k]["cpu_seconds"] for k in lenders) / sum(families[k]["simulated"] for k in lenders))
+            used = (sum(rate_now[k] * families[k]["simulated"] for k in lenders)
+                    / sum(families[k]["simulated"] for k in lenders))
         elif rate is None:  # else the slowest family's
             used = slowest
             if family["left_simulated_seconds"] > 0:
@@ -78,7 +92,7 @@ def study_status(out) -> dict:
         rates[name] = used
         family["left_core_hours"] = None if used is None else family["left_simulated_seconds"] * used / 3600.0
     for family in families.values():
-        del family["cpu_seconds"], family["simulated"]
+        del family["cpu_seconds"], family["simulated"], family["by_processor"]
     _expect(runs, index["runs"], [entry_folder(out, r) for r in index["runs"]])
     now = time.time()
     for r in runs:  # the CPU seconds each run is expected to take yet, and a running run's end at its threads
@@ -104,7 +118,7 @@ def study_status(out) -> dict:
             "expected_core_hours": expected_hours, "unmeasured": unmeasured,
             "hours_at_running_now": (left_hours / counts["running"] if left_hours is not None and counts["running"]
                                      else None),
-            "processors": processors,
+            "processors": processors, "processor_now": now_on, "processor_factor": factor,
             "beds": [_bed_status(folder) for folder in sorted((out / "beds").glob("*")) if folder.is_dir()]}
 
 
@@ -126,6 +140,46 @@ def _bed_status(folder: Path) -> dict:
         state = "in progress" if (folder / CHECKPOINT).exists() else "begun"
     return {"name": folder.name, "state": state, "simulated_seconds": _simulated_so_far(folder, live=True),
             "cpu_seconds": summary.get("cpu_seconds")}
+
+
+def _processor_now(rows: list) -> str | None:
+    """The processor the study computes on now: that of most of its running runs (their summaries, written at
+    each checkpoint, name the machine of the segment that wrote them), else this process's (``cpu_model``: a
+    study that runs here between runs); None where nothing names one."""
+    running = [m[2] for row, m in rows if row["state"] == "running" and m is not None and m[2] != UNRECORDED]
+    if running:
+        return max(set(running), key=running.count)
+    from ..provenance import cpu_model
+    return cpu_model()
+
+
+def _processor_factor(families, now_on: str) -> float | None:
+    """How much faster or slower ``now_on`` runs the study than the machines its other runs ran on: the median,
+    over the families with runs measured both on ``now_on`` and elsewhere, of the ratio of their CPU seconds per
+    simulated second there to elsewhere (None where no family has both)."""
+    ratios = []
+    for family in families:
+        here = family["by_processor"].get(now_on)
+        there = [sum(v[k] for p, v in family["by_processor"].items() if p != now_on) for k in (0, 1)]
+        if here is not None and here[1] > 0 and there[1] > 0 and there[0] > 0:
+            ratios.append((here[0] / here[1]) / (there[0] / there[1]))
+    if not ratios:
+        return None
+    ratios.sort()
+    middle = len(ratios) // 2
+    return ratios[middle] if len(ratios) % 2 else 0.5 * (ratios[middle - 1] + ratios[middle])
+
+
+def _rate_now(family: dict, now_on: str | None, factor: float | None) -> float | None:
+    """A family's CPU seconds per simulated second on the processor the study computes on now: its runs' there
+    where it has any; else its runs' elsewhere times ``factor`` (``_processor_factor``); else, with no factor,
+    its runs' as measured wherever they ran. None where it has no measured run."""
+    if family["simulated"] <= 0:
+        return None
+    here = family["by_processor"].get(now_on) if factor is not None else None
+    if here is not None and here[1] > 0:
+        return here[0] / here[1]
+    return family["cpu_seconds"] / family["simulated"] * (factor if factor is not None else 1.0)
 
 
 def _kin_families(entries: list) -> dict:
@@ -287,6 +341,13 @@ def format_status(status: dict) -> str:
             (cpu if cpu != UNRECORDED else "a processor not recorded (runs made before fvdem recorded it)")
             + f" ({n} run(s))"
             for cpu, n in sorted(processors.items(), key=lambda item: -item[1])))
+    if status.get("processor_factor") is not None:
+        scaled = [f"{name} {f['cpu_per_simulated_second_now']:.0f}" for name, f in status["families"].items()
+                  if f.get("cpu_per_simulated_second_now") is not None]
+        lines.append(f"the estimates below at the rates on {status['processor_now']}, where the study computes now: "
+                     f"{status['processor_factor']:.2g} times those elsewhere (the median over the families measured "
+                     "both there and elsewhere; a family measured there at its own rate there)"
+                     + (f": {'; '.join(scaled)}" if scaled else ""))
     if status["left_core_hours"] is not None and status["left_simulated_seconds"] > 0:
         line = f"left: at most {status['left_core_hours']:.1f} core-hours at these rates"
         if status["unmeasured"]:
