@@ -1634,6 +1634,7 @@ def _fake_run(folder, family, ratio, entropy_rate, voidage):
     (folder / "timeseries.csv").write_text(",".join(columns) + "\n" + "".join(
         ",".join(repr(float(c[k])) for c in columns.values()) + "\n" for k in range(len(t))))
     (folder / "summary.json").write_text(json.dumps({"simulated_time": 4.0, "wall_seconds": 100.0, "t95": None,
+                                                     "cpu_seconds": 90.0, "peak_memory_mb": 350.0, "threads": 1,
                                                      "bed_pressure_drop_std_second_half": 150.0,
                                                      "bed_weight_per_area": 1000.0, "pressure_drop_over_weight": 1.0,
                                                      "provenance": {"fvdem": "x", "host": "vm", "threads": 1,
@@ -1695,6 +1696,9 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     written = report(out)
     table, findings = (json.loads((out / name).read_text()) for name in ("table.json", "findings.json"))
     assert {r["family"]: r["void_fraction_binarity"] is not None for r in table} == {"ar1": True, "ar4_mp": True}
+    assert out / "costs.json" in written and out / "costs.md" in written
+    for name in ("costs.json", "costs.md"):  # kept aside: the archive's, made from it alone, must equal them
+        (tmp_path / name).write_text((out / name).read_text())
     # the findings as a page to read: where the study stands, one row per finding with its verdict, the figures
     page = (out / "findings.md").read_text()
     assert out / "findings.md" in written and page.startswith("# t: findings\n")
@@ -1757,6 +1761,11 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert rounded(json.loads((dest / "findings.json").read_text())) == rounded(findings)
     assert rounded(table) == rounded(again)
     assert (dest / "runs" / "ar1_u_over_umf2" / "run.log").exists() and (dest / "fig7_void_fraction_2.png").exists()
+    # what the runs cost, per family, point and processor, from the archive alone as from the run folders
+    assert (dest / "costs.json").read_text() == (tmp_path / "costs.json").read_text()
+    assert (dest / "costs.md").read_text() == (tmp_path / "costs.md").read_text()
+    assert [(c["family"], c["runs"], c["cpu_per_simulated_second"]["median"])
+            for c in json.loads((dest / "costs.json").read_text())] == [("ar1", 1, 22.5), ("ar4_mp", 1, 22.5)]
     # the results as one file (docs/data/mema2020.json): the table's rows, the findings, what made them
     assert main(["study", str(dest), "--results", str(tmp_path / "results.json")]) == 0
     results = json.loads((tmp_path / "results.json").read_text())
@@ -1765,7 +1774,44 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
     assert results["ran"].startswith("2 of 2 runs reached their end, 0 on the way, 0 not started")
     # the processor the runs' CPU seconds were spent on, beside their host
     assert results["machine"]["hosts"] == ["vm (AMD EPYC (family 26, model 2), 2 CPUs, 1 thread(s) a run)"]
+    assert results["costs"] == json.loads((dest / "costs.json").read_text())
     assert main(["study", str(tmp_path), "--results", str(tmp_path / "r.json")]) == 2  # not a study folder
+
+
+def test_the_costs_of_the_ended_runs_per_family_point_and_processor():
+    """``cost_table``: what the ended runs cost, grouped by family, point and processor (a run resumed on another
+    machine counts where its summary was written), the families in the study's order and each point's values
+    ascending; the median and range of the CPU seconds per simulated second, the mean core-hours a run, the
+    median wall seconds per simulated second, the largest peak memory; a run without CPU seconds is left out."""
+    from fvdem.study.reports import cost_table, costs_page
+    zen1, zen5 = "AMD EPYC (family 23, model 1), 2 CPUs", "AMD EPYC (family 26, model 2), 2 CPUs"
+
+    def run(cpu, simulated, processor, wall=None, memory=None):
+        return {"cpu_seconds": cpu, "simulated_time": simulated, "wall_seconds": wall, "peak_memory_mb": memory,
+                "threads": 1, **({"provenance": {"cpu": processor}} if processor else {})}
+
+    spent = [("ar4", {"gas.u_over_umf": 2.0}, run(3000.0, 5.0, zen1, 4000.0, 400.0)),  # 600 a simulated second
+             ("ar1", {"gas.u_over_umf": 2.0}, run(1000.0, 4.0, zen1, 1200.0, 350.0)),  # 250
+             ("ar4", {"gas.u_over_umf": 2.0}, run(3600.0, 5.0, zen1, 4200.0, 420.0)),  # 720
+             ("ar4", {"gas.u_over_umf": 2.0}, run(2700.0, 5.0, zen1, 3000.0, 380.0)),  # 540
+             ("ar4", {"gas.u_over_umf": 1.6}, run(6000.0, 20.0, None)),  # 300, made before the processor was kept
+             ("ar4", {"gas.u_over_umf": 2.0}, run(1450.0, 5.0, zen5, 1500.0, 378.0)),  # 290
+             ("ar1", {"gas.u_over_umf": 1.6}, run(None, 16.0, zen1))]  # no CPU seconds: left out
+    costs = cost_table(spent)
+    assert [(c["family"], c["point"]["gas.u_over_umf"], c["processor"], c["runs"]) for c in costs] == [
+        ("ar4", 1.6, "not recorded", 1), ("ar4", 2.0, zen1, 3), ("ar4", 2.0, zen5, 1), ("ar1", 2.0, zen1, 1)]
+    old = costs[1]
+    assert old["cpu_per_simulated_second"] == {"median": 600.0, "min": 540.0, "max": 720.0}
+    assert old["core_hours_per_run"] == pytest.approx((3000.0 + 3600.0 + 2700.0) / 3 / 3600.0)
+    assert old["wall_per_simulated_second"] == pytest.approx(800.0) and old["peak_memory_mb"] == 420.0
+    assert old["simulated_seconds"] == [5.0, 5.0] and old["threads"] == 1
+    assert costs[0]["wall_per_simulated_second"] is None and costs[0]["peak_memory_mb"] is None
+    page = costs_page("t", costs)
+    assert page.startswith("# t: what the runs cost\n") and "6 ended run(s) with their CPU seconds" in page
+    assert f"| ar4 | gas.u_over_umf: 2 | {zen1} | 3 | 1 | 5 | 600 (540-720) | 0.86 | 800 | 420 |" in page
+    assert f"| ar4 | gas.u_over_umf: 2 | {zen5} | 1 | 1 | 5 | 290 | 0.40 | 300 | 378 |" in page
+    assert "| ar4 | gas.u_over_umf: 1.6 | not recorded | 1 | 1 | 20 | 300 | 1.67 | - | - |" in page
+    assert cost_table([]) == [] and "0 ended run(s)" in costs_page(None, [])
 
 
 def test_the_t95_chart_shows_runs_that_mixed_or_ended_not_runs_on_their_way(tmp_path, monkeypatch):
@@ -2118,8 +2164,8 @@ def test_a_study_names_its_report_and_an_unknown_report_is_refused(tmp_path):
 
 
 def test_the_generic_report_writes_the_table_alone(tmp_path):
-    """The ``table`` report of the archived stage-1 runs: the generic columns, no figures, no findings; the
-    default report of the same runs adds seed 000's columns, figures and findings."""
+    """The ``table`` report of the archived stage-1 runs: the generic columns and the costs, no figures, no
+    findings; the default report of the same runs adds seed 000's columns, figures and findings."""
     from shutil import copytree
 
     from fvdem.study import report
@@ -2131,7 +2177,9 @@ def test_the_generic_report_writes_the_table_alone(tmp_path):
         written = {p.name for p in report(folder)}
         rows = json.loads((folder / "table.json").read_text())
         if name == "table":
-            assert written == {"table.csv", "table.json"}
+            assert written == {"table.csv", "table.json", "costs.json", "costs.md"}
+            costs = json.loads((folder / "costs.json").read_text())  # 14 runs: 12 families and points, 1 processor
+            assert sum(c["runs"] for c in costs) == 14 and {c["processor"] for c in costs} == {"not recorded"}
             assert set(rows[0]) == {"name", "family", "gas.u_over_umf", "status", "wall_seconds",
                                     "simulated_seconds", "duration", "replica"}
         else:

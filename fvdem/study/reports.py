@@ -98,10 +98,11 @@ def report(out) -> list:
     chosen = report_for(result.get("report"))
     for r in result["runs"]:  # an archive's folders are relative to it
         r["folder"] = str(entry_folder(out, r))
-    rows, drawn = [], []
+    rows, drawn, spent = [], [], []
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
+        cost = data  # the summary as read: what the run's CPU seconds bought (its status is derived below)
         series = _series(Path(r["folder"]))
         if series is not None and (not data or data.get("stopped_early")
                                    or float(series["time"][-1]) > float(data.get("simulated_time", 0.0)) + 1e-9):
@@ -128,6 +129,8 @@ def report(out) -> list:
                     "duration": r.get("duration"),
                     "replica": r.get("replica") or int((re.search(r"_r(\d+)$", r["name"]) or [0, 1])[1])})
         rows.append(row)
+        if r["status"] in ENDED and r.get("planned") is not False:
+            spent.append((r["family"], r.get("point", {}), cost))
     paths = list(chosen.figures(out, drawn)) if chosen.figures else []
     if chosen.table_figures:  # of the values the table and the findings count (the runs the study plans)
         paths += chosen.table_figures(out, [row for row in rows if row["status"] != NOT_PLANNED])
@@ -135,7 +138,10 @@ def report(out) -> list:
     columns = list(dict.fromkeys(k for row in rows for k in row))
     lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
     (out / "table.csv").write_text("\n".join(lines) + "\n")
-    written = paths + [out / "table.csv", out / "table.json"]
+    costs = cost_table(spent)
+    (out / COSTS_FILE).write_text(json.dumps(costs, indent=1) + "\n")
+    (out / COSTS_PAGE).write_text(costs_page(result.get("study"), costs))
+    written = paths + [out / "table.csv", out / "table.json", out / COSTS_FILE, out / COSTS_PAGE]
     if chosen.findings:
         planned = [row for row in rows if row["status"] != NOT_PLANNED]
         findings = chosen.findings(planned)
@@ -150,6 +156,8 @@ def report(out) -> list:
 
 
 FINDINGS_PAGE = "findings.md"  # the report's findings and figures as one page to read (``findings_page``)
+COSTS_FILE = "costs.json"  # what the ended runs cost, per family, point and processor (``cost_table``)
+COSTS_PAGE = "costs.md"  # the same as a page to read (``costs_page``)
 PLAN_FILE = "plan.toml"  # the report's [[points]] tables that would decide its open findings (``StudyReport.plan``)
 _VERDICT_ORDER = {"holds": 0, "does not hold": 1, "open": 2}
 _VERDICT_PLURAL = {"holds": "hold", "does not hold": "do not hold"}  # "2 hold", "2 do not hold"; "open" stays
@@ -184,6 +192,78 @@ def findings_page(study, rows: list, findings: list, figures: list, plan: str | 
         lines += ["", "## Figures", "", "Drawn beside this page by `fvdem study <this folder> --report` (an archive "
                   "keeps the data they are drawn from, not the images).", ""]
         lines += [f"![{Path(p).stem}]({Path(p).name})" for p in figures]
+    return "\n".join(lines) + "\n"
+
+
+def cost_table(spent: list) -> list:
+    """What the ended runs cost, to size a workstation or a batch allocation: ``spent`` holds ``(family, point,
+    summary)`` per ended run (its ``summary.json``); one entry per family, point (the study file's axes values) and
+    processor (the summary's ``provenance.cpu``, "not recorded" before fvdem recorded it), by family in the study's
+    order, then point:
+    ``{"family", "point", "processor", "runs", "threads", "simulated_seconds" ([least, most] a run),
+    "cpu_per_simulated_second" ({"median", "min", "max"}), "core_hours_per_run" (the mean CPU seconds over 3600),
+    "wall_per_simulated_second" (the median: above the CPU's where runs shared their cores), "peak_memory_mb"
+    (the largest; a study worker's peak over the runs it held)}``. Runs without ``cpu_seconds`` are left out."""
+    groups = {}
+    for family, point, summary in spent:
+        cpu, simulated = summary.get("cpu_seconds"), summary.get("simulated_time")
+        if not cpu or not simulated:
+            continue
+        processor = (summary.get("provenance") or {}).get("cpu") or "not recorded"
+        key = (family, json.dumps(point, sort_keys=True), processor)
+        groups.setdefault(key, {"family": family, "point": point, "processor": processor, "runs": []})
+        groups[key]["runs"].append(summary)
+    families = list(dict.fromkeys(family for family, _, _ in spent))
+
+    def order(group):  # the families in the study's order, each point's values ascending, then the processor
+        values = [(k, (0, v, "") if isinstance(v, (int, float)) else (1, 0, str(v)))
+                  for k, v in sorted(group["point"].items())]
+        return families.index(group["family"]), values, group["processor"]
+
+    table = []
+    for group in sorted(groups.values(), key=order):
+        runs = group.pop("runs")
+        rates = sorted(float(s["cpu_seconds"]) / float(s["simulated_time"]) for s in runs)
+        walls = sorted(float(s["wall_seconds"]) / float(s["simulated_time"]) for s in runs if s.get("wall_seconds"))
+        memory = [float(s["peak_memory_mb"]) for s in runs if s.get("peak_memory_mb") is not None]
+        threads = sorted({s.get("threads") for s in runs if s.get("threads") is not None})
+        table.append({**group, "runs": len(runs), "threads": threads[0] if len(threads) == 1 else threads or None,
+                      "simulated_seconds": [min(float(s["simulated_time"]) for s in runs),
+                                            max(float(s["simulated_time"]) for s in runs)],
+                      "cpu_per_simulated_second": {"median": _median(rates), "min": rates[0], "max": rates[-1]},
+                      "core_hours_per_run": sum(float(s["cpu_seconds"]) for s in runs) / len(runs) / 3600.0,
+                      "wall_per_simulated_second": _median(walls) if walls else None,
+                      "peak_memory_mb": max(memory) if memory else None})
+    return table
+
+
+def _median(values: list) -> float:
+    values = sorted(values)
+    middle = len(values) // 2
+    return values[middle] if len(values) % 2 else 0.5 * (values[middle - 1] + values[middle])
+
+
+def costs_page(study, costs: list) -> str:
+    """``cost_table`` as a Markdown page: one row per family, point and processor."""
+    lines = [f"# {study or 'study'}: what the runs cost", "",
+             f"{sum(c['runs'] for c in costs)} ended run(s) with their CPU seconds, per family, point and processor "
+             "(`fvdem study <this folder> --report`, from each run's `summary.json`; `costs.json` beside this page). "
+             "CPU seconds are the cost of a core of one's own; wall seconds run above them where runs shared their "
+             "cores. A core-hour a run is its mean CPU seconds over 3600: to size an allocation, multiply by the "
+             "runs, divided by the cores each run uses (`threads`).", "",
+             "| family | point | processor | runs | threads | simulated s a run | CPU s per simulated s: median "
+             "(range) | core-hours a run | wall s per simulated s | peak memory MB |", "|---" * 10 + "|"]
+    for c in costs:
+        rate = c["cpu_per_simulated_second"]
+        span = c["simulated_seconds"]
+        lines.append("| " + " | ".join(str(cell) for cell in (
+            c["family"], describe_values(c["point"]) or "-", c["processor"], c["runs"],
+            "-" if c["threads"] is None else describe_values(c["threads"]),
+            f"{span[0]:.3g}" if span[0] == span[1] else f"{span[0]:.3g}-{span[1]:.3g}",
+            f"{rate['median']:.0f}" + ("" if c["runs"] == 1 else f" ({rate['min']:.0f}-{rate['max']:.0f})"),
+            f"{c['core_hours_per_run']:.2f}",
+            "-" if c["wall_per_simulated_second"] is None else f"{c['wall_per_simulated_second']:.0f}",
+            "-" if c["peak_memory_mb"] is None else f"{c['peak_memory_mb']:.0f}")) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -387,7 +467,8 @@ def results(out, dest) -> Path:
     runs ran with, short, and how many runs each), ``machine`` (hosts, their processors where recorded, threads,
     libraries of the runs),
     ``ran`` (how many runs reached their end, how many are on the way, how many have not started), ``runs``
-    (the table's rows without folders) and ``findings`` (the report's, if it has them). Returns ``dest``."""
+    (the table's rows without folders), ``costs`` (``cost_table``) and ``findings`` (the report's, if it has
+    them). Returns ``dest``."""
     import datetime
 
     out, dest = Path(out), Path(dest)
@@ -418,6 +499,7 @@ def results(out, dest) -> Path:
                f"{planned - ended - started} not started{_unplanned(rows)}"
                + ("" if findings is None else f"; {decided} of {len(findings)} findings decided"),
         "runs": [{k: v for k, v in row.items() if k != "folder"} for row in rows],
+        "costs": json.loads((out / COSTS_FILE).read_text()),
     }
     if findings is not None:
         study["findings"] = findings
