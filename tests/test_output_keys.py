@@ -1,5 +1,6 @@
 """Every case in cases/ writes the timeseries columns and summary keys recorded before the scenes
-restructuring (issue 15): ``tests/output_keys.py`` recorded them with the code of b38a3bd; the `timings` table (issue 16) was added on purpose since."""
+restructuring (issue 15): ``tests/output_keys.py`` recorded them with the code of b38a3bd; the `timings` table (issue 16)
+and `provenance.cpu` (2026-12-06) were added on purpose since."""
 import json
 
 import pytest
