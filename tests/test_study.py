@@ -2295,7 +2295,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     ended, first = queue.take(0)
     # the study file's priority 1 (AR-4 MP and drag only at 1.6 Umf) first, first replicas before second ones
     assert ended == [] and [r.name for r in first] == ["ar4_mp_u_over_umf1.6_r1", "ar4_mp_drag_u_over_umf1.6_r1"]
-    assert queue.take(2) == ([], []) and len(queue) == 133
+    assert queue.take(2) == ([], []) and len(queue) == 127
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
@@ -2304,7 +2304,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 131
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 125
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
