@@ -2334,12 +2334,17 @@ def test_until_takes_a_clock_time_an_iso_time_or_a_duration_and_refuses_a_past_o
     assert "Traceback" not in refused.stderr and not Path("never").exists()
 
 
-def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path):
+def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path, monkeypatch):
     """``until``: a freed slot goes first to the runs expected to end before the deadline (their expected
     simulated seconds left at their family's CPU seconds per simulated second, ``study_status``), in
     ``_priority`` order among themselves, then the others; a slot is not left idle."""
     import shutil
     import time
+
+    import fvdem.provenance
+    # read on a processor none of the archive's runs ran on: the rates as measured (on one of theirs the status
+    # scales them to it: tests/test_locks.py)
+    monkeypatch.setattr(fvdem.provenance, "cpu_model", lambda: "a processor of its own")
 
     from fvdem.study.runner import _Queue, _bed_wall, _expected_wall, _fitting
     from fvdem.study.status import study_status
