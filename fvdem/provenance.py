@@ -77,6 +77,16 @@ def cpu_model(cpuinfo: str = "/proc/cpuinfo") -> str | None:
     return name + (f", {cpus} CPUs" if cpus else "")
 
 
+# the processor of a run whose summary does not name one (made before fvdem recorded it, 2026-12-06)
+UNRECORDED_CPU = "not recorded"
+
+
+def processor_of(summary: dict) -> str:
+    """The processor a run's ``summary.json`` says its CPU seconds were spent on (``provenance.cpu``), or
+    ``UNRECORDED_CPU``."""
+    return (summary.get("provenance") or {}).get("cpu") or UNRECORDED_CPU
+
+
 def provenance(threads: int | None = None) -> dict:
     """``{"fvdem", "commit", "date" (UTC, ISO 8601), "host", "cpu" (``cpu_model``), "threads", "python",
     "numpy", "numba", "fipy", "command"}`` of this process now."""

@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import json
 import re
+import statistics
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 from ..io.locks import LOCK_FILE
 from ..io.run_folder import write_text_atomic
+from ..provenance import processor_of
 from .tasks import ENDED, FAILED, IN_PROGRESS, NOT_PLANNED, _simulated_so_far, entry_folder
 
 
@@ -209,7 +211,7 @@ def cost_table(spent: list) -> list:
         cpu, simulated = summary.get("cpu_seconds"), summary.get("simulated_time")
         if not cpu or not simulated:
             continue
-        processor = (summary.get("provenance") or {}).get("cpu") or "not recorded"
+        processor = processor_of(summary)
         key = (family, json.dumps(point, sort_keys=True), processor)
         groups.setdefault(key, {"family": family, "point": point, "processor": processor, "runs": []})
         groups[key]["runs"].append(summary)
@@ -224,23 +226,18 @@ def cost_table(spent: list) -> list:
     for group in sorted(groups.values(), key=order):
         runs = group.pop("runs")
         rates = sorted(float(s["cpu_seconds"]) / float(s["simulated_time"]) for s in runs)
-        walls = sorted(float(s["wall_seconds"]) / float(s["simulated_time"]) for s in runs if s.get("wall_seconds"))
+        walls = [float(s["wall_seconds"]) / float(s["simulated_time"]) for s in runs if s.get("wall_seconds")]
         memory = [float(s["peak_memory_mb"]) for s in runs if s.get("peak_memory_mb") is not None]
         threads = sorted({s.get("threads") for s in runs if s.get("threads") is not None})
         table.append({**group, "runs": len(runs), "threads": threads[0] if len(threads) == 1 else threads or None,
                       "simulated_seconds": [min(float(s["simulated_time"]) for s in runs),
                                             max(float(s["simulated_time"]) for s in runs)],
-                      "cpu_per_simulated_second": {"median": _median(rates), "min": rates[0], "max": rates[-1]},
+                      "cpu_per_simulated_second": {"median": statistics.median(rates), "min": rates[0],
+                                                   "max": rates[-1]},
                       "core_hours_per_run": sum(float(s["cpu_seconds"]) for s in runs) / len(runs) / 3600.0,
-                      "wall_per_simulated_second": _median(walls) if walls else None,
+                      "wall_per_simulated_second": statistics.median(walls) if walls else None,
                       "peak_memory_mb": max(memory) if memory else None})
     return table
-
-
-def _median(values: list) -> float:
-    values = sorted(values)
-    middle = len(values) // 2
-    return values[middle] if len(values) % 2 else 0.5 * (values[middle - 1] + values[middle])
 
 
 def costs_page(study, costs: list) -> str:

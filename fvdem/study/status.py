@@ -13,10 +13,12 @@ one (``fvdem study OUT --archive DEST``).
 from __future__ import annotations
 
 import json
+import statistics
 import time
 from pathlib import Path
 
 from ..io.locks import describe_holder, holder
+from ..provenance import UNRECORDED_CPU, processor_of
 from ..io.run_folder import CHECKPOINT, FINAL_STATE
 from .reports import _series, report_for
 from .tasks import FAILED, NOT_PLANNED, _folder_case, _simulated_so_far, _summary, entry_folder
@@ -26,8 +28,6 @@ from .tasks import FAILED, NOT_PLANNED, _folder_case, _simulated_so_far, _summar
 # starts again from t = 0); nothing yet; its last attempt failed (its cause in study.json); the study file no
 # longer lists it and it has not ended (its folder kept: ``write_index``; nothing left of it is counted)
 STATES = ("ended", "running", "in progress", "partial", "not started", "failed", NOT_PLANNED)
-# the processor of a run whose summary does not name one (made before fvdem recorded it, 2026-12-06)
-UNRECORDED = "not recorded"
 
 
 def study_status(out) -> dict:
@@ -44,8 +44,8 @@ def study_status(out) -> dict:
     "expected_core_hours"}}, "left_simulated_seconds", "left_core_hours" (at most: every run to its duration),
     "expected_left_simulated_seconds", "expected_core_hours" (each run's ``expected_left``, ``_expect``),
     "unmeasured" (families left without a measured rate), "hours_at_running_now", "processors" (``{processor: runs}``
-    of the runs the rates were measured on, from their provenance's ``cpu``; ``UNRECORDED`` for runs made before fvdem
-    recorded it: the same run costs 2-3 times more CPU seconds on one machine than on another), "processor_now"
+    of the runs the rates were measured on, ``processor_of`` their summaries: the same run costs 2-3 times more CPU
+    seconds on one machine than on another), "processor_now"
     (``_processor_now``) and "processor_factor" (``_processor_factor``; None where the rates are taken as measured),
     "beds" (``_bed_status``)}``."""
     out = Path(out)
@@ -146,7 +146,7 @@ def _processor_now(rows: list) -> str | None:
     """The processor the study computes on now: that of most of its running runs (their summaries, written at
     each checkpoint, name the machine of the segment that wrote them), else this process's (``cpu_model``: a
     study that runs here between runs); None where nothing names one."""
-    running = [m[2] for row, m in rows if row["state"] == "running" and m is not None and m[2] != UNRECORDED]
+    running = [m[2] for row, m in rows if row["state"] == "running" and m is not None and m[2] != UNRECORDED_CPU]
     if running:
         return max(set(running), key=running.count)
     from ..provenance import cpu_model
@@ -163,11 +163,7 @@ def _processor_factor(families, now_on: str) -> float | None:
         there = [sum(v[k] for p, v in family["by_processor"].items() if p != now_on) for k in (0, 1)]
         if here is not None and here[1] > 0 and there[1] > 0 and there[0] > 0:
             ratios.append((here[0] / here[1]) / (there[0] / there[1]))
-    if not ratios:
-        return None
-    ratios.sort()
-    middle = len(ratios) // 2
-    return ratios[middle] if len(ratios) % 2 else 0.5 * (ratios[middle - 1] + ratios[middle])
+    return statistics.median(ratios) if ratios else None
 
 
 def _rate_now(family: dict, now_on: str | None, factor: float | None) -> float | None:
@@ -287,8 +283,7 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
            "peak_memory_mb": summary.get("peak_memory_mb"), "threads": summary.get("threads"),
            **({"error": r.get("error")} if state == "failed" else {}),
            **({"writer": writer} if writer else {})}
-    processor = (summary.get("provenance") or {}).get("cpu") or UNRECORDED
-    return row, ((float(cpu), measured, processor) if cpu and measured > 0 else None)
+    return row, ((float(cpu), measured, processor_of(summary)) if cpu and measured > 0 else None)
 
 
 def format_status(status: dict) -> str:
@@ -338,7 +333,7 @@ def format_status(status: dict) -> str:
     processors = status.get("processors") or {}
     if processors:
         lines.append("measured on: " + "; ".join(
-            (cpu if cpu != UNRECORDED else "a processor not recorded (runs made before fvdem recorded it)")
+            (cpu if cpu != UNRECORDED_CPU else "a processor not recorded (runs made before fvdem recorded it)")
             + f" ({n} run(s))"
             for cpu, n in sorted(processors.items(), key=lambda item: -item[1])))
     if status.get("processor_factor") is not None:
