@@ -123,7 +123,7 @@ def _cluster_file(path: Path, **options) -> Path:
 
 
 def _long_smoke(tmp_path: Path, duration: float) -> Path:
-    """The smoke study with ``duration`` simulated seconds per run (about 5.5 s of wall time per
+    """The smoke study with ``duration`` simulated seconds per run (2.6-5.5 s of wall time per
     simulated second on one core) and absolute case paths."""
     text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/').replace("duration = 0.02", f"duration = {duration}")
     path = tmp_path / "long.toml"
@@ -148,13 +148,14 @@ def test_a_run_longer_than_its_jobs_walltime_pauses_is_resubmitted_and_ends_bit_
     """Jobs of 1 minute that stop their run 50 s before the walltime: the run checkpoints, pauses, goes back
     into the queue, resumes in the next job (the study retires the old job's worker and adaptive scaling
     starts a new job), however many it takes, and ends bit-for-bit where the same run ends uninterrupted.
-    Each job leaves the run 10 s less the worker's start, 0.65-1.05 simulated s of the small bed here (about
-    5 s of wall time per simulated s on one core): the run of 3 s needs three jobs or more on this machine
-    and two on one twice as fast. Dask's lost-worker-timeout (15 s, how long a gone worker's job is still
-    counted before a new one is started) is shortened to 1 s for the test; a retired worker does not come
-    back."""
+    Each job leaves the run 10 s less the worker's start (2-3 s): at 2.6 s of wall time per simulated s of the
+    small bed on one core (a Zen 5 core, the fastest measured; 5-5.5 on a Zen 1 or 3) that is at most about
+    3 simulated s, so the run of 8 s needs three jobs or more there, two on a machine twice as fast, and six
+    or more (about 2 minutes) on the slow ones. (A run of 3 s ended within its first job on CI's Zen 5.)
+    Dask's lost-worker-timeout (15 s, how long a gone worker's job is still counted before a new one is
+    started) is shortened to 1 s for the test; a retired worker does not come back."""
     from fvdem.study import load_study, prepare_bed, run_task
-    study_file = _long_smoke(tmp_path, 3.0)
+    study_file = _long_smoke(tmp_path, 8.0)
     cluster = _cluster_file(tmp_path / "slurm.toml", workers=1, walltime="00:01:00", stop_before_walltime="50s")
     environ = {**os.environ, "DASK_DISTRIBUTED__DEPLOY__LOST_WORKER_TIMEOUT": "1s"}
     started = time.time()
