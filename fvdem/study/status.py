@@ -18,8 +18,8 @@ import time
 from pathlib import Path
 
 from ..io.locks import describe_holder, holder
-from ..provenance import UNRECORDED_CPU, processor_of
 from ..io.run_folder import CHECKPOINT, FINAL_STATE
+from ..provenance import UNRECORDED_CPU, processor_of
 from .reports import _series, report_for
 from .tasks import FAILED, NOT_PLANNED, _folder_case, _simulated_so_far, _summary, entry_folder
 
