@@ -5,6 +5,7 @@ struggling gas step), the gas watch stops the run with ``SimulationError`` namin
 """
 from __future__ import annotations
 
+import statistics
 import warnings
 from collections import deque
 
@@ -57,7 +58,7 @@ class RunawayWatch:
         if self.chunks == 1:
             return
         if "cost" not in self.warned_about and len(self.recent) >= 3:
-            typical = sorted(self.recent)[len(self.recent) // 2]
+            typical = statistics.median_high(self.recent)  # a recorded chunk: its rebuilds and step too
             if rate >= RUNAWAY_COST * typical[0]:
                 self.warned_about.add("cost")
                 self._warn(rate, typical, rebuilds)
