@@ -1985,9 +1985,9 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     # 2.9 in the tall column to three; then, a
     # tranche at priority -1 for the differences at 2.0 and 2.9 Umf, runs that end when they mix from beds of their
     # own (seeds from 201): at 2.0 eight of AR-1, six of AR-4 MP and four of drag only, at 2.9 in the tall column
-    # six, four and four; and a second, the open findings' plan once the first had ended: at 2.0 44, 13 and 17, at
-    # 2.9 16, 5 and 7
-    assert len(study.runs) == 199 and {r.replica for r in study.runs} == set(range(1, 45))
+    # six, four and four; and a second, the open findings' plan once the first had ended (at 2.0 44, 13 and 17, at
+    # 2.9 16, 5 and 7), trimmed once one of them was decided: at 2.0 24, 10 and 10, at 2.9 10, 5 and 7
+    assert len(study.runs) == 163 and {r.replica for r in study.runs} == set(range(1, 25))
     cut = {(r.family, r.point["gas.u_over_umf"]): [] for r in study.runs if r.family.endswith("_t95")}
     for r in study.runs:
         if r.family.endswith("_t95"):
@@ -1995,8 +1995,8 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
                                                                r.overrides["time.stop_after_mixed"]))
     assert cut == {(f"ar{f}", v): [(k, f"ar{f[0]}_t95" + (f"_r{k}" if k > 1 else ""), -1, 8.0, 0.0)
                                    for k in range(1, n + 1)]
-                   for f, v, n in (("1_t95", 2.0, 44), ("4_mp_t95", 2.0, 13), ("4_mp_drag_t95", 2.0, 17),
-                                   ("1_tall_t95", 2.9, 16), ("4_mp_tall_t95", 2.9, 5), ("4_mp_drag_tall_t95", 2.9, 7))}
+                   for f, v, n in (("1_t95", 2.0, 24), ("4_mp_t95", 2.0, 10), ("4_mp_drag_t95", 2.0, 10),
+                                   ("1_tall_t95", 2.9, 10), ("4_mp_tall_t95", 2.9, 5), ("4_mp_drag_tall_t95", 2.9, 7))}
     assert {r.name for r in study.runs if r.priority == 1} == {
         f"ar4_mp{drag}_u_over_umf1.6_r{k}" for drag in ("", "_drag") for k in range(1, 4 + (drag != ""))}
     assert {r.priority for r in study.runs if not r.family.endswith("_t95") and r.priority != 1} == {0}
@@ -2004,8 +2004,8 @@ def test_every_first_replica_starts_before_any_second_one_and_its_bed_between(tm
     assert listed["ar1_t95_u_over_umf2_r1"] == 0.0 and listed["ar1_u_over_umf2_r1"] == 2.0
     assert {r.overrides["domain.upper"][2] for r in study.runs if r.family.endswith("tall_t95")} == {2.1}
     seeds = {b.name: b.overrides.get("particles.insertion.seed") for b in study.beds if "_t95" in b.name}
-    assert seeds == {**{f"ar1_t95{f'_r{k}' if k > 1 else ''}": 200 + k for k in range(1, 45)},
-                     **{f"ar4_t95{f'_r{k}' if k > 1 else ''}": 200 + k for k in range(1, 18)}}
+    assert seeds == {**{f"ar1_t95{f'_r{k}' if k > 1 else ''}": 200 + k for k in range(1, 25)},
+                     **{f"ar4_t95{f'_r{k}' if k > 1 else ''}": 200 + k for k in range(1, 11)}}
     study = replace(study, runs=tuple(r for r in study.runs if not r.family.endswith("_t95")),
                     beds=tuple(b for b in study.beds if "_t95" not in b.name))
     short = {r.name: (r.duration, r.bed) for r in study.runs if "expansion" in r.name}
@@ -2297,7 +2297,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     ended, first = queue.take(0)
     # the study file's priority 1 (AR-4 MP and drag only at 1.6 Umf) first, first replicas before second ones
     assert ended == [] and [r.name for r in first] == ["ar4_mp_u_over_umf1.6_r1", "ar4_mp_drag_u_over_umf1.6_r1"]
-    assert queue.take(2) == ([], []) and len(queue) == 197
+    assert queue.take(2) == ([], []) and len(queue) == 161
     late = next(r for r in study.runs if r.name == "ar4_sp_u_over_umf2.3_r2")
     Path(late.folder).mkdir(parents=True)
     (Path(late.folder) / "summary.json").write_text(json.dumps({"simulated_time": 0.5, "stopped_early": True}))
@@ -2306,7 +2306,7 @@ def test_the_queue_hands_on_runs_one_free_slot_at_a_time_in_the_order_of_their_f
     Path(done.folder).mkdir(parents=True)
     (Path(done.folder) / "summary.json").write_text(json.dumps({"simulated_time": 8.0}))
     ended, taken = queue.take(2)
-    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 195
+    assert [r.name for r in ended] == ["ar1_u_over_umf2.9_r1"] and taken == [] and len(queue) == 159
     sizes = iter([3, 1])
     live = _Queue(study.runs[:5], lambda: next(sizes))  # a running cluster's threads, read at each take
     assert len(live.take(0)[1]) == 3
