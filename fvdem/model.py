@@ -111,7 +111,8 @@ def build_dem(case: Case, particles: ParticleArrays) -> DEMSystem:
     """The case's DEM on its backend (``run.dem_backend``; ``fvdem.dem.backends``)."""
     c = case.contact
     contact = ContactModel(c.normal_stiffness, c.restitution, c.friction, c.rolling_friction,
-                           c.tangential_stiffness_ratio, c.tangential_damping_ratio)
+                           c.tangential_stiffness_ratio, c.tangential_damping_ratio, c.wall_friction,
+                           c.wall_rolling_friction)
     box = Box(case.domain.lower, case.domain.upper, case.domain.periodic)
     return build_backend(case.run.dem_backend, particles, box, contact, case.time.dem_step, case.domain.gravity,
                          case.contact.neighbour_skin)  # None: the adaptive skin

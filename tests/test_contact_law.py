@@ -325,3 +325,46 @@ def test_rolling_torque_on_both_sides_of_its_cap(speed):
     np.testing.assert_allclose(torque, expected, rtol=1e-14, atol=0.0)
     capped = mu_r * r_eff * f_n / norm > inertia * inv_dt
     assert capped == (speed < 10.0)  # the cases cover both branches (the cap at |w_r| = 6 rad/s)
+
+
+@pytest.mark.parametrize("mu_wall", [0.1, 0.3])
+def test_a_wall_friction_of_its_own_sets_the_sliding_time_on_the_wall(mu_wall):
+    """``wall_friction``: a sphere sliding on the floor reaches rolling at 5/7 v0 after 2 v0 / (7 mu_w g), the wall's
+    coefficient, not the particles' (0.8 here; the particle-particle law is untouched: no pair exists)."""
+    v0 = 0.5
+    contact = ContactModel(friction=0.8, rolling_friction=0.0, wall_friction=mu_wall)
+    s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
+                    box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
+    m = s.particles.mass[0]
+    s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
+    s.reference_position[:] = s.particles.position
+    s.compute_forces()
+    slide_time = 2 * v0 / (7 * mu_wall * 9.81)
+    s.step(int(0.5 * slide_time / s.dt))  # half-way: still sliding, decelerated at mu_w g
+    assert by_id(s, "velocity")[0, 0] == pytest.approx(v0 - mu_wall * 9.81 * 0.5 * slide_time, rel=0.02)
+    s.step(int(slide_time / s.dt))
+    assert by_id(s, "velocity")[0, 0] == pytest.approx(5 / 7 * v0, rel=0.01)
+
+
+def test_the_wall_coefficients_default_to_the_particles_and_a_wall_rolling_friction_decelerates():
+    """Unset, the wall's coefficients are the particle-particle ones (the same kernel vector); a rolling sphere on
+    the floor decelerates at 5/7 mu_rw g with ``wall_rolling_friction`` mu_rw (energy balance), and keeps rolling
+    with mu_rw = 0 whatever the particles' mu_r."""
+    from fvdem.dem.contact_law import FRICTION, ROLLING_FRICTION, WALL_FRICTION, WALL_ROLLING_FRICTION
+    p = ContactModel(friction=0.4, rolling_friction=0.2).parameters(1e-5, 1e-4)
+    assert p[WALL_FRICTION] == p[FRICTION] == 0.4 and p[WALL_ROLLING_FRICTION] == p[ROLLING_FRICTION] == 0.2
+    v0, t = 0.3, 0.05
+    ends = []
+    for mu_rw in (0.05, 0.0):
+        contact = ContactModel(friction=0.5, rolling_friction=0.3, wall_rolling_friction=mu_rw)
+        s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
+                        box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
+        m = s.particles.mass[0]
+        s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
+        s.particles.angular_momentum[0, 1] = s.particles.inertia[0, 0] * v0 / R
+        s.reference_position[:] = s.particles.position
+        s.compute_forces()
+        s.step(int(t / s.dt))
+        ends.append(by_id(s, "velocity")[0, 0])
+    assert ends[0] == pytest.approx(v0 - 5 / 7 * 0.05 * 9.81 * t, rel=0.02)
+    assert ends[1] == pytest.approx(v0, rel=1e-3)

@@ -133,6 +133,10 @@ class ContactConfig:
     restitution: float = spec(0.43, gt=0.0, le=1.0, doc="coefficient of restitution e in (0, 1]")
     friction: float = spec(0.46, ge=0.0, doc="sliding friction coefficient mu")
     rolling_friction: float = spec(0.46, ge=0.0, doc="rolling friction coefficient mu_r (CDT model)")
+    wall_friction: float | None = spec(None, ge=0.0, optional=True,
+                                       doc="particle-wall sliding friction (default: friction, as particle-particle)")
+    wall_rolling_friction: float | None = spec(None, ge=0.0, optional=True,
+                                               doc="particle-wall rolling friction (default: rolling_friction)")
     tangential_stiffness_ratio: float = spec(2.0 / 7.0, gt=0.0, doc="k_t / k_n")
     tangential_damping_ratio: float = spec(1.0, ge=0.0, doc="eta_t / eta_n")
     neighbour_skin: float | None = spec(None, unit="length", gt=0.0, optional=True,

@@ -50,7 +50,8 @@ import numpy as np
 from numba import njit
 
 # indices into the contact parameter vector passed to kernels
-K_N, K_T, ZETA_N, ETA_T_OVER_ETA_N, FRICTION, ROLLING_FRICTION, DT, ZETA_WALL = range(8)
+K_N, K_T, ZETA_N, ETA_T_OVER_ETA_N, FRICTION, ROLLING_FRICTION, DT, ZETA_WALL, WALL_FRICTION, WALL_ROLLING_FRICTION = \
+    range(10)
 
 
 def _collision_in_units_of_w0(zeta: float):
@@ -157,10 +158,11 @@ def calibrated_damping_ratio(restitution: float, step: float, phases: int = 8) -
 
 
 def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tangential_damping_factor,
-                       friction, rolling_friction, dt, mass) -> np.ndarray:
+                       friction, rolling_friction, dt, mass, wall_friction=None, wall_rolling_friction=None) -> np.ndarray:
     """Pack the contact law's parameters into the float vector that kernels take. The damping
-    ratios are calibrated for particles of ``mass`` [kg] at time step ``dt`` [s]."""
-    p = np.zeros(8)
+    ratios are calibrated for particles of ``mass`` [kg] at time step ``dt`` [s]. ``wall_friction`` and
+    ``wall_rolling_friction``: the particle-wall coefficients (None: the particle-particle ones)."""
+    p = np.zeros(10)
     p[K_N] = normal_stiffness
     p[K_T] = tangential_stiffness
     p[ZETA_N] = calibrated_damping_ratio(restitution, dt * math.sqrt(normal_stiffness / (0.5 * mass)))
@@ -169,6 +171,8 @@ def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tang
     p[FRICTION] = friction
     p[ROLLING_FRICTION] = rolling_friction
     p[DT] = dt
+    p[WALL_FRICTION] = friction if wall_friction is None else wall_friction
+    p[WALL_ROLLING_FRICTION] = rolling_friction if wall_rolling_friction is None else wall_rolling_friction
     return p
 
 

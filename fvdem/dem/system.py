@@ -88,12 +88,14 @@ class ContactModel:
     rolling_friction: float = 0.46
     tangential_stiffness_ratio: float = 2.0 / 7.0
     tangential_damping_ratio: float = 1.0
+    wall_friction: float | None = None  # particle-wall sliding friction (None: ``friction``)
+    wall_rolling_friction: float | None = None  # particle-wall rolling friction (None: ``rolling_friction``)
 
     def parameters(self, dt: float, mass: float) -> np.ndarray:
         """Kernel parameter vector; the damping is calibrated for particles of ``mass`` [kg] at ``dt``."""
         return contact_parameters(self.normal_stiffness, self.tangential_stiffness_ratio * self.normal_stiffness,
                                   self.restitution, self.tangential_damping_ratio, self.friction,
-                                  self.rolling_friction, dt, mass)
+                                  self.rolling_friction, dt, mass, self.wall_friction, self.wall_rolling_friction)
 
     def collision_time(self, mass: float) -> float:
         """Binary collision time [s] of two particles of ``mass`` [kg] (reduced mass m/2)."""

@@ -9,6 +9,7 @@ import json
 import math
 import re
 from pathlib import Path
+from dataclasses import replace
 
 from ..analysis.plots import COLOUR_LAYERS
 from ..scenes.observables import colour_layer_record
@@ -1522,7 +1523,7 @@ def _headline(result: dict) -> str:
     return f"t95 {result['t95']:.3g} s" if result.get("t95") is not None else "t95 -"
 
 
-register_report(StudyReport(
+MEMA2020 = register_report(StudyReport(
     "mema2020", "seed 000 (Mema et al., 2020): mixing and t95 figures, pressure drop, binarity, the paper's findings",
     run_values=lambda summary: {"t95": summary.get("t95")}, headline=_headline, live=_live, columns=_columns,
     figures=_figures, table_figures=_table_figures, findings=check_findings, plan=plan_points,
@@ -1531,3 +1532,10 @@ register_report(StudyReport(
     archived_summary=("t95", "pressure_drop_over_weight", "bed_pressure_drop_std_second_half", "bed_weight_per_area",
                       "bed_height", "mixing_cells", "mixing_entropy_random"),
     archive_extra=_archive_extra, archive_files=(VOID_FRACTION, CHANNELS, COLOUR_LAYERS), watch=("mixing_entropy",)))
+
+# the same per-run table without the paper's figures and findings: a designed screening of a bed (its responses
+# are these columns: t95, dense_bed_expansion, pressure_drop_std_over_weight, corner_gas_share, ...)
+register_report(replace(
+    MEMA2020, name="bed", summary="a fluidized bed's run table (t95, expansion, pressure-drop fluctuation, channels, "
+    "rod alignment, overlaps) without the paper's findings: for screenings and studies of one's own bed",
+    figures=None, table_figures=None, findings=None, plan=None))

@@ -100,12 +100,14 @@ def report(out) -> list:
     chosen = report_for(result.get("report"))
     for r in result["runs"]:  # an archive's folders are relative to it
         r["folder"] = str(entry_folder(out, r))
-    rows, drawn, spent = [], [], []
+    rows, drawn, spent, series_of = [], [], [], {}
     for r in result["runs"]:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
         cost = data  # the summary as read: what the run's CPU seconds bought (its status is derived below)
         series = _series(Path(r["folder"]))
+        if result.get("design"):
+            series_of[r["name"]] = series  # the screening's responses at chosen times
         if series is not None and (not data or data.get("stopped_early")
                                    or float(series["time"][-1]) > float(data.get("simulated_time", 0.0)) + 1e-9):
             # a run in progress: what its time series holds (the summary of an earlier stop, or of the end
@@ -136,6 +138,9 @@ def report(out) -> list:
     paths = list(chosen.figures(out, drawn)) if chosen.figures else []
     if chosen.table_figures:  # of the values the table and the findings count (the runs the study plans)
         paths += chosen.table_figures(out, [row for row in rows if row["status"] != NOT_PLANNED])
+    if result.get("design"):  # a designed study: the effects of its factors (``fvdem.study.screening``)
+        from .screening import screening
+        paths += screening(out, result["design"], rows, series_of)
     (out / "table.json").write_text(json.dumps(rows, indent=1) + "\n")
     columns = list(dict.fromkeys(k for row in rows for k in row))
     lines = [",".join(columns)] + [",".join("" if row.get(c) is None else str(row.get(c)) for c in columns) for row in rows]
@@ -326,7 +331,7 @@ def archive(out, dest) -> list:
             _refresh_duration(runs[r["name"]], r)
             continue
         held = _simulated_so_far(target, live=True) if target.exists() else -1.0
-        columns = [c for c in ("time", *chosen.archived_columns) if c in series]
+        columns = [c for c in dict.fromkeys(("time", *chosen.archived_columns, *_design_series(index))) if c in series]
         if float(series["time"][-1]) < held or float(series["time"][-1]) == held and not _lacks(target, columns):
             # what the archive holds is as far along (a later invocation lost nothing); the study's word on
             # the run (its status, its duration) is refreshed where the folder holds as much as the archive
@@ -361,6 +366,13 @@ def archive(out, dest) -> list:
     if (out / "study.toml").exists():
         (dest / "study.toml").write_text((out / "study.toml").read_text())
     return written + report(dest)
+
+
+def _design_series(index: dict) -> tuple:
+    """The time-series columns a designed study's responses read at chosen times (``mixing_entropy@3.0``): the
+    archive keeps them whatever its report keeps, so that the screening rebuilds from it."""
+    responses = (index.get("design") or {}).get("responses", [])
+    return tuple(r.split("@")[0] for r in responses if "@" in r)
 
 
 def _supersede_archived(target: Path, entry: dict, dest: Path, folder: Path) -> Path | None:

@@ -451,8 +451,8 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
         for sig, handler in handlers.items():
             signal.signal(sig, handler)
     index = write_index(out, study, results, description)
-    summary = {"study": study.name, "report": study.report, "scheduler": description, "runs": index["runs"],
-               "wall_seconds": time.perf_counter() - started}
+    summary = {"study": study.name, "report": study.report, **({"design": study.design} if study.design else {}),
+               "scheduler": description, "runs": index["runs"], "wall_seconds": time.perf_counter() - started}
     if (out / STOP_FILE).exists():
         summary["stopped"] = True
     if until is not None:
@@ -518,8 +518,8 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
             + [unflagged(r) if n in planned else {**r, "planned": False}
                for n, r in latest.items() if n not in names and (n in planned or _holds(out, r))]
             + [listed(r) for r in study.left_out if r.name not in latest])
-    index = {**{k: v for k, v in record.items() if k != "runs"}, "study": study.name, "file": study.path,
-             "report": study.report,
+    index = {**{k: v for k, v in record.items() if k not in ("runs", "design")}, "study": study.name,
+             "file": study.path, "report": study.report, **({"design": study.design} if study.design else {}),
              **({"scheduler": description} if description else {}), "runs": runs}
     write_text_atomic(path, json.dumps(index, indent=1) + "\n")
     return index

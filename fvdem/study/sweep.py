@@ -18,9 +18,11 @@ from .reports import DEFAULT_REPORT, REPORTS, report_for
 BED_STATE = ("particles.initial_state",)
 
 STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
-              "durations", "points", "cluster", "report"}
+              "durations", "points", "cluster", "report", "design"}
 BED_KEYS = {"case", "set"}  # a [beds.NAME] table's
 FAMILY_KEYS = BED_KEYS | {"bed", "duration", "replicas", "priority"}  # a [families.NAME] table's
+DESIGN_KEYS = FAMILY_KEYS | {"name", "factors", "generators", "fraction", "centre_points", "responses", "censored",
+                            "confidence"}  # the [design] table's (``fvdem.study.designed``)
 POINT_KEYS = ("duration", "replicas", "priority")  # what a [[points]] table sets ([[durations]]: duration)
 REPLICAS_SPAN, PRIORITY_SPAN = (1, 1000), (-1000, 1000)  # the integers ``replicas`` and ``priority`` take
 
@@ -64,6 +66,7 @@ class Study:
     cluster: dict
     report: str = DEFAULT_REPORT  # a registered report (``fvdem.study.reports``): the study's table, figures, findings
     left_out: tuple = ()  # the runs (``RunSpec``) a selection (``--only``) left out: the index lists them too
+    design: dict | None = None  # a ``[design]``'s record (``designed_runs``): factors, aliases, responses
 
 
 def load_study(path, out) -> Study:
@@ -99,29 +102,31 @@ def study_from_table(table: dict, path, out) -> Study:
             _problem(problems, f"axes.{key}", values, "a non-empty list of values")
     axes = {k: v for k, v in axes.items() if isinstance(v, list) and v}  # the others are reported
     families = _table(table, "families", problems)
-    if not families:
-        problems.append("families: a study needs at least one family ([families.NAME] with case = ...)")
+    if not families and "design" not in table:
+        problems.append("families: a study needs at least one family ([families.NAME] with case = ...) or a "
+                        "[design]")
     beds_table = _table(table, "beds", problems)
     out = Path(out).resolve()  # run folders and bed states are read from other folders (the cases')
     base = path.parent
 
-    def entry(kind, key, spec):
+    def entry(kind, key, spec):  # key None: the table is ``kind`` itself ([design])
+        where = kind if key is None else f"{kind}.{key}"
         if not isinstance(spec, dict) or "case" not in spec:
-            _problem(problems, f"{kind}.{key}", spec, "a table with case = 'path of a case file'")
+            _problem(problems, f"{where}", spec, "a table with case = 'path of a case file'")
             return None, {}
         if not isinstance(spec["case"], str) or not spec["case"].strip():
-            _problem(problems, f"{kind}.{key}.case", spec["case"], "the path of a case file (a string)")
+            _problem(problems, f"{where}.case", spec["case"], "the path of a case file (a string)")
             return None, {}
-        allowed = FAMILY_KEYS if kind == "families" else BED_KEYS
+        allowed = {"families": FAMILY_KEYS, "beds": BED_KEYS}.get(kind, DESIGN_KEYS)
         for k in sorted(set(spec) - allowed):
-            _problem(problems, f"{kind}.{key}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
+            _problem(problems, f"{where}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
                      + ", ".join(sorted(allowed)))
         case_path = (base / spec["case"]).resolve()
         if not case_path.is_file():
-            _problem(problems, f"{kind}.{key}.case", spec["case"], f"no such case file ({case_path})")
+            _problem(problems, f"{where}.case", spec["case"], f"no such case file ({case_path})")
         sets = spec.get("set", {})
         if not isinstance(sets, dict):
-            _problem(problems, f"{kind}.{key}.set", sets, "a table of case keys and values")
+            _problem(problems, f"{where}.set", sets, "a table of case keys and values")
             sets = {}
         return str(case_path), sets
 
@@ -200,6 +205,14 @@ def study_from_table(table: dict, path, out) -> Study:
                 runs.append(RunSpec(run_name, family, case_path, overrides, str(out / "runs" / run_name),
                                     replica_bed(bed, replica) if bed is not None else None, point, run_duration,
                                     replica, report, priority=point_priority))
+    design = None
+    if "design" in table:
+        from .designed import designed_runs
+        design_runs, design = designed_runs(table["design"], settings, duration, replicas, report, entry, bed_names,
+                                            replica_bed, out, problems)
+        if design is not None and design["name"] in families:
+            _problem(problems, "design.name", design["name"], "a name no family has (it names the design's runs)")
+        runs += design_runs
     _check_names(runs, beds, problems)
     cluster = _table(table, "cluster", problems)
     check_cluster(cluster, problems)
@@ -217,7 +230,7 @@ def study_from_table(table: dict, path, out) -> Study:
         raise CaseError(problems)
     beds = [replace(s, physics=checked[id(s)][0]) for s in beds]
     runs = [replace(s, physics=checked[id(s)][0], stop_after_mixed=checked[id(s)][1]) for s in runs]
-    return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report)
+    return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report, design=design)
 
 
 def _matches(key, wanted, value) -> bool:

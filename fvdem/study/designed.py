@@ -1,0 +1,153 @@
+"""A study file's ``[design]``: a two-level factorial (full or fractional) over named factors, each a pair of
+case-override sets, expanded into the study's runs (``designed_runs``), with the record ``study.json`` keeps
+(factors, letters, generators, defining relation, resolution, aliases, responses) for the screening report
+(``fvdem.study.screening``).
+
+    [design]
+    name = "screen"                        # its runs' family and name prefix: screen_01_r1, screen_02_r1, ...
+    case = "../cases/ar1.toml"             # the base run, as a family's: case, bed, set, duration, priority
+    bed = "ar1"
+    fraction = 2                           # 2^(k-2): the standard generators; or generators = ["E = ABC", ...]
+    replicas = 2                           # each design point k times, replica k from its own bed (seed + k - 1)
+    centre_points = 0                      # runs with every factor at its ``centre`` (each factor needs one)
+    responses = ["t95", "mixing_entropy@3.0", "dense_bed_expansion"]  # table columns, or series@time
+    censored = ["t95"]                     # responses a run may end without: its end time stands for them
+    [design.factors.rolling]
+    low = {}                               # the base run's own value
+    high = {"contact.rolling_friction" = 0.0}
+    [design.factors.packing]
+    low = {}
+    high = {bed = "ar1_dense"}             # a level may start its runs from another of the study's beds
+
+Factors are lettered A, B, C, ... in the file's order; the runs follow the design's standard order, every
+point's first replica before any second one (a campaign cut short has the whole design once)."""
+from __future__ import annotations
+
+import re
+
+from .checks import _did_you_mean, _problem
+from .design import DesignError, two_level
+
+FACTOR_KEYS = {"low", "high", "centre", "doc"}
+RESPONSE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(@[0-9]+(\.[0-9]*)?)?$")  # column, or series column@time
+
+
+def designed_runs(spec, settings: dict, duration, replicas: int, report: str, entry, bed_names: set, replica_bed,
+                  out, problems: list) -> tuple[list, dict | None]:
+    """The runs of a ``[design]`` table (``spec``) and its record for ``study.json``; every problem (key path,
+    value, what is allowed) appended to ``problems``. ``entry``, ``replica_bed``: the study reader's own (a
+    family's case and overrides; a replica's bed)."""
+    from .sweep import RunSpec, _integer, _priority_of, _replicas, _seconds
+    if not isinstance(spec, dict):
+        _problem(problems, "design", spec, "a table ([design] with case, factors, ...)")
+        return [], None
+    case_path, sets = entry("design", None, spec)
+    name = spec.get("name", "design")
+    if not isinstance(name, str) or not re.match(r"^[A-Za-z][A-Za-z0-9_]*$", name):
+        _problem(problems, "design.name", name, "a plain name (letters, digits, _): it names the design's runs")
+        name = "design"
+    base_bed = spec.get("bed")
+    if base_bed is not None and base_bed not in bed_names:
+        _problem(problems, "design.bed", base_bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+        base_bed = None
+    run_duration = spec.get("duration", duration)
+    if "duration" in spec and not _seconds(run_duration, "design.duration", problems):
+        run_duration = duration
+    run_duration = float(run_duration) if isinstance(run_duration, (int, float)) else 0.0
+    design_replicas = _replicas(spec, "design.replicas", replicas, problems)
+    priority = _priority_of(spec, "design.priority", problems)
+    centre_points = _integer(spec, "centre_points", "design.centre_points", 0, (0, 100), 0, problems)
+    factors = spec.get("factors")
+    if not isinstance(factors, dict) or len(factors) < 2:
+        _problem(problems, "design.factors", factors, "a table of two or more factors ([design.factors.NAME] with "
+                 "low = {...} and high = {...})")
+        return [], None
+    levels = {}
+    for factor, table in factors.items():
+        where = f"design.factors.{factor}"
+        if not re.match(r"^[A-Za-z][A-Za-z0-9_]*$", factor):
+            _problem(problems, where, "...", "a plain factor name (letters, digits, _)")
+            continue
+        if not isinstance(table, dict) or "low" not in table or "high" not in table:
+            _problem(problems, where, table, "a table with low = {...} and high = {...} (case keys and values; "
+                     "bed = 'NAME' to start from another of the study's beds)")
+            continue
+        for k in sorted(set(table) - FACTOR_KEYS):
+            _problem(problems, f"{where}.{k}", table[k], f"unknown key{_did_you_mean(k, FACTOR_KEYS)}; allowed: "
+                     + ", ".join(sorted(FACTOR_KEYS)))
+        levels[factor] = {}
+        for level in ("low", "high", "centre"):
+            if level not in table:
+                continue
+            value = table[level]
+            if not isinstance(value, dict):
+                _problem(problems, f"{where}.{level}", value, "a table of case keys and values ({} for the base run's)")
+                continue
+            bed = value.get("bed")
+            if bed is not None and bed not in bed_names:
+                _problem(problems, f"{where}.{level}.bed", bed,
+                         f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+            levels[factor][level] = value
+        if table.get("low") == table.get("high"):
+            _problem(problems, where, table, "two different levels (low and high set the same)")
+    if centre_points and any("centre" not in v for v in levels.values()):
+        lacking = [f for f, v in levels.items() if "centre" not in v]
+        _problem(problems, "design.centre_points", centre_points, "centre points need every factor's centre = {...}; "
+                 f"{', '.join(lacking)} have none (a factor of two settings, e.g. a model on or off, has no centre)")
+        centre_points = 0
+    responses = spec.get("responses", [])
+    if not isinstance(responses, list) or not responses or not all(isinstance(r, str) and RESPONSE.match(r)
+                                                                   for r in responses):
+        _problem(problems, "design.responses", responses, "a non-empty list of responses: table columns of the "
+                 "study's report (e.g. 't95') or a time-series column at a time ('mixing_entropy@3.0')")
+        responses = []
+    censored = spec.get("censored", [])
+    if not isinstance(censored, list) or any(c not in responses for c in censored):
+        _problem(problems, "design.censored", censored, "a list of the design's responses that a run may end "
+                 "without (its end time stands for them: a lower bound)")
+        censored = []
+    confidence = spec.get("confidence", 0.95)
+    if not isinstance(confidence, float) or not 0.5 <= confidence < 1.0:
+        _problem(problems, "design.confidence", confidence, "a number in [0.5, 1), e.g. 0.95")
+        confidence = 0.95
+    names = list(factors)
+    letters_of = {}
+    try:
+        fraction = spec.get("fraction")
+        if fraction is not None and (not isinstance(fraction, int) or isinstance(fraction, bool) or fraction < 1):
+            raise DesignError(f"fraction = {fraction!r}: an integer p >= 1 (a 2^(k-p) fraction)")
+        generators = spec.get("generators", [])
+        if not isinstance(generators, list):
+            raise DesignError(f"generators = {generators!r}: a list of strings such as 'E = ABC'")
+        letters_of = {n: letter for n, letter in zip(names, "ABCDEFGHJKLMNOPQRSTUVWXYZ")}
+        design = two_level(len(names), generators, names=letters_of, fraction=fraction)
+    except DesignError as exc:
+        _problem(problems, "design", f"{len(names)} factors", str(exc))
+        return [], None
+    if case_path is None or len(levels) != len(names):
+        return [], None
+    runs = []
+    points = [(f"{name}_{i + 1:02d}", dict(zip(names, map(int, row)))) for i, row in enumerate(design.matrix)]
+    points += [(f"{name}_c{j + 1}", dict.fromkeys(names, 0)) for j in range(centre_points)]
+    for replica in range(1, design_replicas + 1):
+        for point_name, coded in points:
+            overrides, bed = {**settings, **sets}, base_bed
+            for factor, code in coded.items():
+                level = dict(levels[factor][{-1: "low", 1: "high", 0: "centre"}[code]])
+                bed = level.pop("bed", bed)
+                overrides.update(level)
+            overrides["time.end"] = run_duration
+            if design_replicas > 1 and bed is None:
+                overrides["particles.insertion.seed"] = replica
+            runs.append(RunSpec(f"{point_name}_r{replica}", name, case_path, overrides, str(out / "runs" / f"{point_name}_r{replica}"),
+                                replica_bed(bed, replica) if bed is not None else None,
+                                {f"design.{f}": c for f, c in coded.items()}, run_duration, replica, report,
+                                priority=priority - (replica - 1)))
+    record = {"name": name, "label": design.label(), "letters": letters_of, "generators": list(design.generators),
+              "defining_relation": design.defining_relation(), "resolution": design.resolution,
+              "factors": {f: {"letter": letters_of[f], **{k: v for k, v in factors[f].items() if k in FACTOR_KEYS}}
+                          for f in names},
+              "aliases": {design.letters[j]: design.aliases(design.letters[j]) for j in range(len(names))},
+              "replicas": design_replicas, "centre_points": centre_points, "responses": responses,
+              "censored": censored, "confidence": confidence}
+    return runs, record
