@@ -117,9 +117,36 @@ def study_schema() -> dict:
                              "bed": {"type": "string", "description": "the bed (a [beds] name) its runs start from"},
                              "duration": {**seconds, "description": "this family's own simulated seconds"},
                              "replicas": replicas, "priority": priority}}
+    level = {"type": "object", "properties": {"bed": {"type": "string", "description": "start from this bed"}},
+             "propertyNames": {"enum": ["bed", *case_keys()]},
+             "description": "case keys and values of this level ({} for the base run's); bed: another of the "
+                            "study's beds"}
+    factor = {"type": "object", "required": ["low", "high"], "additionalProperties": False,
+              "properties": {"low": {"$ref": "#/$defs/level"}, "high": {"$ref": "#/$defs/level"},
+                             "centre": {"$ref": "#/$defs/level"}, "doc": {"type": "string"}}}
+    design = {"type": "object", "required": ["case", "factors", "responses"], "additionalProperties": False,
+              "description": "a two-level factorial over named factors (docs/screening.md)",
+              "properties": {**family["properties"],
+                             "name": {"type": "string", "pattern": "^[A-Za-z][A-Za-z0-9_]*$", "default": "design",
+                                      "description": "the family and name prefix of the design's runs"},
+                             "factors": {"type": "object", "minProperties": 2, "additionalProperties": factor,
+                                         "description": "factors lettered A, B, ... in the file's order"},
+                             "generators": {"type": "array", "items": {"type": "string"},
+                                            "description": "'E = ABC' (letters) or 'e = a*b*c' (names)"},
+                             "fraction": {"type": "integer", "minimum": 1,
+                                          "description": "p of a 2^(k-p) fraction with the standard generators"},
+                             "centre_points": {"type": "integer", "minimum": 0, "maximum": 100, "default": 0},
+                             "responses": {"type": "array", "minItems": 1, "items": {"type": "string"},
+                                           "description": "table columns, or series columns at a time "
+                                                          "('mixing_entropy@3.0')"},
+                             "censored": {"type": "array", "items": {"type": "string"},
+                                          "description": "responses a run may end without (its end stands for them)"},
+                             "confidence": {"type": "number", "minimum": 0.5, "exclusiveMaximum": 1,
+                                            "default": 0.95}}}
     return {"$schema": SCHEMA_VERSION, "title": "fvdem study file",
             "description": "A sweep of fvdem runs (fvdem study): docs/studies.md",
-            "type": "object", "required": ["duration", "families"], "additionalProperties": False,
+            "type": "object", "required": ["duration"], "anyOf": [{"required": ["families"]}, {"required": ["design"]}],
+            "additionalProperties": False, "$defs": {"level": level},
             "properties": {
                 "name": {"type": "string"}, "description": {"type": "string"},
                 "duration": {**seconds, "description": "simulated seconds of every run (time.end)"},
@@ -130,6 +157,7 @@ def study_schema() -> dict:
                          "description": "settled beds, each prepared once before the runs that start from it"},
                 "families": {"type": "object", "minProperties": 1, "additionalProperties": family,
                              "description": "families of runs: a base case and its own settings"},
+                "design": design,
                 "axes": {"type": "object", "propertyNames": {"enum": case_keys()},
                          "additionalProperties": {"type": "array", "minItems": 1},
                          "description": "case keys and the values to sweep (every combination)"},

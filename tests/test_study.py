@@ -2162,7 +2162,7 @@ def test_a_study_names_its_report_and_an_unknown_report_is_refused(tmp_path):
     path.write_text('report = "mema202"\n' + text)
     with pytest.raises(CaseError) as refused:
         load_study(path, tmp_path / "out")
-    assert "report = 'mema202': a registered report (did you mean 'mema2020'?): mema2020, table" in str(refused.value)
+    assert "report = 'mema202': a registered report (did you mean 'mema2020'?): bed, mema2020, table" in str(refused.value)
 
 
 def test_the_generic_report_writes_the_table_alone(tmp_path):

@@ -47,7 +47,7 @@ def designed_runs(spec, settings: dict, duration, replicas: int, report: str, en
         _problem(problems, "design.name", name, "a plain name (letters, digits, _): it names the design's runs")
         name = "design"
     base_bed = spec.get("bed")
-    if base_bed is not None and base_bed not in bed_names:
+    if base_bed is not None and (not isinstance(base_bed, str) or base_bed not in bed_names):
         _problem(problems, "design.bed", base_bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
         base_bed = None
     run_duration = spec.get("duration", duration)
@@ -84,9 +84,10 @@ def designed_runs(spec, settings: dict, duration, replicas: int, report: str, en
                 _problem(problems, f"{where}.{level}", value, "a table of case keys and values ({} for the base run's)")
                 continue
             bed = value.get("bed")
-            if bed is not None and bed not in bed_names:
+            if bed is not None and (not isinstance(bed, str) or bed not in bed_names):
                 _problem(problems, f"{where}.{level}.bed", bed,
                          f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+                continue
             levels[factor][level] = value
         if table.get("low") == table.get("high"):
             _problem(problems, where, table, "two different levels (low and high set the same)")
@@ -124,8 +125,9 @@ def designed_runs(spec, settings: dict, duration, replicas: int, report: str, en
     except DesignError as exc:
         _problem(problems, "design", f"{len(names)} factors", str(exc))
         return [], None
-    if case_path is None or len(levels) != len(names):
-        return [], None
+    if case_path is None or len(levels) != len(names) or any(
+            not {"low", "high"} <= set(levels[f]) or centre_points and "centre" not in levels[f] for f in names):
+        return [], None  # each problem is reported above
     runs = []
     points = [(f"{name}_{i + 1:02d}", dict(zip(names, map(int, row)))) for i, row in enumerate(design.matrix)]
     points += [(f"{name}_c{j + 1}", dict.fromkeys(names, 0)) for j in range(centre_points)]

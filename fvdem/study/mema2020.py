@@ -1118,6 +1118,33 @@ def _told_rows(rows) -> list:
     return [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
 
 
+WINDOW_TIMES = tuple(1.0 + 0.5 * k for k in range(15))  # s: 1.0, 1.5, ..., 8.0: the entropy curve's window
+ENTROPY_TIMES = (2.0, 4.0, 6.0, 8.0)  # s: the entropy at fixed times the table shows beside its window mean
+LATER_READINGS: list = []  # later sets of rules, each ``(rows, whole) -> findings`` (``mema2020_readings``)
+
+
+def entropy_columns(series, ended_mixed: bool) -> dict:
+    """A run's mixing entropy at ``ENTROPY_TIMES`` (``mixing_entropy_at_<t>``) and averaged over ``WINDOW_TIMES``
+    (``mixing_entropy_window``), from its time series; a time past the series' end holds the last value where
+    the run ended mixed, else None (not reached yet)."""
+    import numpy as np
+    keys = [f"mixing_entropy_at_{t:g}" for t in ENTROPY_TIMES] + ["mixing_entropy_window"]
+    if series is None or "mixing_entropy" not in series or not len(series["time"]):
+        return dict.fromkeys(keys)
+    time, entropy = np.asarray(series["time"], float), np.asarray(series["mixing_entropy"], float)
+
+    def at(t):
+        if t > time[-1] + 1e-9 and not ended_mixed:
+            return None
+        return float(np.interp(t, time, entropy))
+
+    values = {f"mixing_entropy_at_{t:g}": at(t) for t in ENTROPY_TIMES}
+    window = [at(t) for t in WINDOW_TIMES]
+    values["mixing_entropy_window"] = None if None in window else float(sum(window) / len(window))
+    return values
+
+
+
 def check_findings(rows) -> list:
     """Each finding of Mema et al. (2020) (§5-§6), with fvdem's numbers and one word: holds, does not hold, or
     open (and why: runs missing, too short to mix, or differences within the noise without replicas).
@@ -1131,6 +1158,7 @@ def check_findings(rows) -> list:
     out, not taken as unmixed. The runs of a family "<name>_t95" count as <name>'s in the t95 findings alone
     (``_t95_runs``), not in the bed expansion's nor the void fractions'."""
     whole = [r for r in rows if not r["family"].endswith(T95_ONLY)]  # the expansion's and the void fractions'
+    table = rows  # as given: the later readings count their runs themselves
     rows = _t95_runs(rows)
     planned, rows = rows, _told_rows(rows)
     planned = _tall_columns(planned)[0]  # a taller column's runs in place of the paper's column's at their points
@@ -1192,6 +1220,8 @@ def check_findings(rows) -> list:
     findings.append(_compare_binarity(whole))
     if any(r["family"] == "ar1_paper" for r in rows):  # fvdem's own check, where a study runs that family
         findings.append(_defaults_against_paper_settings(rows))
+    for readings in LATER_READINGS:  # later rules, beside these (never in their place)
+        findings += readings(table, [r for r in table if not r["family"].endswith(T95_ONLY)])
     return findings
 
 
@@ -1427,7 +1457,8 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
             "final_mixing_entropy": (float(series["mixing_entropy"][-1])
                                      if series is not None and "mixing_entropy" in series else None),
             "mixing_entropy_random": data.get("mixing_entropy_random"),
-            "void_fraction_binarity": None if record is None else record["binarity"], **_overlaps(series)}
+            "void_fraction_binarity": None if record is None else record["binarity"], **_overlaps(series),
+            **entropy_columns(series, t95 is not None)}
 
 
 def _overlaps(series) -> dict:

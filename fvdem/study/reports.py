@@ -49,7 +49,7 @@ class StudyReport:
 
 REPORTS: dict[str, StudyReport] = {}
 DEFAULT_REPORT = "mema2020"
-REPORT_MODULES = ("mema2020",)  # modules of this package that register reports, imported on first use
+REPORT_MODULES = ("mema2020", "mema2020_readings")  # modules of this package that register reports, imported on first use
 
 
 def register_report(report: StudyReport) -> StudyReport:
@@ -60,10 +60,9 @@ def register_report(report: StudyReport) -> StudyReport:
 
 def report_for(name: str | None) -> StudyReport:
     """The registered report ``name`` (the default for None); ``report_for(None)`` also fills ``REPORTS``."""
-    if DEFAULT_REPORT not in REPORTS:
-        import importlib
-        for module in REPORT_MODULES:
-            importlib.import_module(f"{__package__}.{module}")
+    import importlib
+    for module in REPORT_MODULES:  # each once (imported modules are cached)
+        importlib.import_module(f"{__package__}.{module}")
     return REPORTS[name or DEFAULT_REPORT]
 
 

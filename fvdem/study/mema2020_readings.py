@@ -1,0 +1,275 @@
+"""The paper's findings read on the evidence the paper gives for them: the second set of rules of seed 000's
+report (issue 66), fixed on 2026-12-07, before the study's stage 3, and never to be replaced after seeing its
+numbers (a later reading may be added beside them). The first set (``fvdem.study.mema2020.check_findings``)
+stays as it was and is reported beside this one: old and new verdicts side by side.
+
+Where the paper's evidence is an entropy curve (Figs. 2, 3, 9 a), a rule reads the curves: each run's mixing
+entropy averaged over ``WINDOW_TIMES`` (1-8 s after the start, every 0.5 s; a run that ended mixed before 8 s
+holds its last value there: the entropy of a mixed bed stays at its ceiling), compared between families with
+the replicas' spread; t95 is the second reading, where the first set reads it. Orders are told by Welch's t on
+the replicas' means (``mema2020._margin``: Student's t at 97.7 % one-sided for the Welch-Satterthwaite degrees
+of freedom); "alike" is the equivalence test of ``mema2020._alike`` (the difference with its t errors within
+10 % of the larger mean)."""
+from __future__ import annotations
+
+import math
+
+from .mema2020 import (ENDED, ENTROPY_TIMES, LATER_READINGS, _alike, _by_velocity, _compare, _critical,
+                       _expansion_runs, _margin, _margin_words, _sample_variance, _satterthwaite, _t95_runs,
+                       _tall_columns, _told_rows)
+
+FIXED = "2026-12-07"  # the date these rules were committed, before stage 3's first run
+LITTLE = 0.20  # "little change": every velocity's mean t95 at or above 2.3 Umf within this of the largest
+
+
+def _mean(values: list) -> float:
+    return sum(values) / len(values)
+
+
+def _order(a: list, b: list) -> str | None:
+    """``"higher"`` / ``"lower"`` where ``a``'s mean lies above / below ``b``'s by more than t standard errors,
+    ``"alike"`` where the equivalence test tells them alike, else None (more replicas would tell; also without a
+    spread: one run a side tells nothing)."""
+    margin = _margin(a, b)
+    if margin is None:
+        return None
+    error, k = margin
+    difference = _mean(a) - _mean(b)
+    if abs(difference) > k * error:
+        return "higher" if difference > 0 else "lower"
+    return "alike" if _alike(a, b) else None
+
+
+def _window(rows, family) -> dict:
+    """``{U/Umf: [window mean entropy of each run that holds one]}`` of a family."""
+    return {v: [x for x in values if x is not None]
+            for v, values in _by_velocity(rows, family, "mixing_entropy_window").items()}
+
+
+def _curves(rows, family, v) -> dict:
+    """The mean entropy at ``ENTROPY_TIMES`` of a family's runs at ``v`` (for the finding's numbers)."""
+    out = {}
+    for t in ENTROPY_TIMES:
+        values = [x for x in _by_velocity(rows, family, f"mixing_entropy_at_{t:g}").get(v, []) if x is not None]
+        out[f"{t:g} s"] = _mean(values) if values else None
+    return out
+
+
+def _verdict(claim: str, told: dict, untold: list, values: dict, rule: str, paper: str) -> dict:
+    """One finding: ``told`` velocity -> whether the claim holds there; one told against decides; untold ones
+    leave it open; else it holds."""
+    base = {"finding": claim, "values": values, "rule": f"{rule}; the paper: {paper}", "readings": "second",
+            "fixed": FIXED}
+    if told and not all(told.values()):
+        return {**base, "verdict": "does not hold"}
+    if untold or not told:
+        return {**base, "verdict": "open", "why": "; ".join(untold) or "no velocity where both ran"}
+    return {**base, "verdict": "holds"}
+
+
+def entropy_higher(rows, higher: str, lower: str, velocities: tuple, claim: str, paper: str) -> dict:
+    """``higher``'s entropy curves stand above ``lower``'s at each of ``velocities`` (where both ran): the mean
+    window entropy told higher; told lower or alike decides against."""
+    a, b = _window(rows, higher), _window(rows, lower)
+    told, untold, values = {}, [], {}
+    for v in velocities:
+        if not a.get(v) or not b.get(v):
+            if v in a or v in b:
+                untold.append(f"{v:g} Umf: waits for both families' runs")
+            continue
+        order = _order(a[v], b[v])
+        values[f"{v:g}"] = {higher: {"window": _mean(a[v]), "runs": len(a[v]), **_curves(rows, higher, v)},
+                            lower: {"window": _mean(b[v]), "runs": len(b[v]), **_curves(rows, lower, v)},
+                            "order": order or "untold"}
+        if order is None:
+            untold.append(f"{v:g} Umf: the window means {_mean(a[v]):.3g} and {_mean(b[v]):.3g} within their "
+                          "spread (more replicas)")
+        else:
+            told[v] = order == "higher"
+    rule = (f"each run's mixing entropy averaged over 1-8 s (every 0.5 s; a run that ended mixed holds its last "
+            f"value): the mean of {higher}'s replicas above {lower}'s by more than t standard errors "
+            f"({_margin_words()}) at each of {', '.join(f'{v:g}' for v in velocities)} Umf; told below, or alike "
+            "(the difference with t errors within 10 % of the larger), decides against")
+    return _verdict(claim, told, untold, values, rule, paper)
+
+
+def little_change(rows, family: str, paper: str) -> dict:
+    """Little change of t95 at and above 2.3 Umf (one test for every shape): the largest difference between two
+    velocities' mean t95 (replicas, from 2.3 Umf on) with its t standard errors within ``LITTLE`` of the larger
+    mean: holds; the difference less its t errors beyond ``LITTLE``: does not hold; else open. A run not mixed by
+    its end leaves its velocity unknown (open)."""
+    claim = f"{family}: little change of t95 above about 2.3 Umf (second reading: one equivalence test)"
+    t = {v: x for v, x in _by_velocity(rows, family, "t95").items() if v >= 2.3 - 1e-9}
+    rule = (f"the largest difference between two velocities' mean t95 at or above 2.3 Umf, with t standard errors "
+            f"({_margin_words()}), within {100 * LITTLE:.0f} % of the larger mean: holds; beyond it by more than t "
+            "errors: does not hold")
+    if len(t) < 2:
+        return _verdict(claim, {}, ["fewer than two velocities at or above 2.3 Umf"], {}, rule, paper)
+    if any(None in x for x in t.values()):
+        return _verdict(claim, {}, ["a run not mixed by its end at or above 2.3 Umf"], {}, rule, paper)
+    means = {v: _mean(x) for v, x in t.items()}
+    hi, lo = max(means, key=means.get), min(means, key=means.get)
+    margin = _margin(t[hi], t[lo])
+    values = {f"{v:g}": {"mean": means[v], "runs": len(t[v])} for v in sorted(t)}
+    if margin is None:
+        return _verdict(claim, {}, ["no replicas: no spread"], values, rule, paper)
+    error, k = margin
+    difference, bound = means[hi] - means[lo], LITTLE * means[hi]
+    values["largest difference"] = {"between": [f"{hi:g}", f"{lo:g}"], "seconds": difference,
+                                    "with t errors": difference + k * error, "bound": bound}
+    if difference + k * error < bound:
+        return _verdict(claim, {hi: True}, [], values, rule, paper)
+    if difference - k * error > bound:
+        return _verdict(claim, {hi: False}, [], values, rule, paper)
+    return _verdict(claim, {}, [f"{difference:.3g} s between {hi:g} and {lo:g} Umf, +- {k * error:.3g} s, about "
+                                f"the {bound:.3g} s bound (more replicas)"], values, rule, paper)
+
+
+def dense_expansion(rows, paper: str) -> dict:
+    """AR-4 MP's dense bed stands higher than AR-1's (the height below which 90 % of the particle centres lie, over
+    its settled height: ``dense_bed_expansion``, what the snapshots of Figs. 5, 6 and 8 show as the bed) at every
+    velocity both ran, told by the replicas' spread."""
+    claim = "AR-4 beds expand more than AR-1 at the same U/Umf (second reading: the dense bed, Figs. 5-8)"
+    rows = [r for r in _expansion_runs(rows) if r["status"] in ENDED and r.get("dense_bed_expansion") is not None]
+    a, b = _by_velocity(rows, "ar4_mp", "dense_bed_expansion"), _by_velocity(rows, "ar1", "dense_bed_expansion")
+    told, untold, values = {}, [], {}
+    for v in sorted(set(a) & set(b)):
+        order = _order(a[v], b[v])
+        values[f"{v:g}"] = {"ar4_mp": _mean(a[v]), "ar1": _mean(b[v]), "runs": [len(a[v]), len(b[v])],
+                            "order": order or "untold"}
+        if order is None:
+            untold.append(f"{v:g} Umf: within their spread")
+        else:
+            told[v] = order == "higher"
+    rule = ("mean dense-bed expansion (the height under 90 % of the particle centres over its settled value) of AR-4 "
+            f"MP above AR-1's by more than t standard errors ({_margin_words()}) at every velocity both ran; told "
+            "below, or alike, decides against")
+    return _verdict(claim, told, untold, values, rule, paper)
+
+
+def largest_change_first(rows, families: tuple, paper: str) -> dict:
+    """The largest change of the entropy curves is from 1.6 to 1.7 Umf (Fig. 2): in each family, the rise of the
+    mean window entropy from 1.6 to 1.7 Umf larger than each later rise between neighbouring velocities, told by
+    the t errors of the two rises' difference."""
+    claim = "the largest change of mixing is from 1.6 to 1.7 Umf (Fig. 2)"
+    told, untold, values = {}, [], {}
+    for family in families:
+        w = {v: x for v, x in _window(rows, family).items() if x}
+        if 1.6 not in w or 1.7 not in w:
+            if w:
+                untold.append(f"{family}: waits for 1.6 and 1.7 Umf")
+            continue
+        first = _mean(w[1.7]) - _mean(w[1.6])
+        velocities = sorted(v for v in w if v >= 1.7)
+        values[family] = {"1.6 -> 1.7": first}
+        verdicts = []
+        for lo, hi in zip(velocities, velocities[1:]):
+            rise = _mean(w[hi]) - _mean(w[lo])
+            groups = [w[1.7], w[1.6], w[hi], w[lo]] if lo != 1.7 else [w[1.6], w[hi], w[1.7]]
+            error, df = _rise_error(groups)
+            values[family][f"{lo:g} -> {hi:g}"] = rise
+            if error is None:
+                verdicts.append(None)
+                continue
+            k = _critical(df)
+            verdicts.append(True if first - rise > k * error else False if rise - first > k * error else None)
+        if False in verdicts:
+            told[family] = False
+        elif None in verdicts or not verdicts:
+            untold.append(f"{family}: a later rise within the noise of the first (more replicas)")
+        else:
+            told[family] = True
+    rule = ("in each family, the mean window entropy's rise from 1.6 to 1.7 Umf larger than each rise between later "
+            f"neighbouring velocities by more than t standard errors of their difference ({_margin_words()}); one "
+            "later rise told larger decides against")
+    return _verdict(claim, told, untold, values, rule, paper)
+
+
+def _rise_error(groups: list) -> tuple[float | None, float | None]:
+    """The standard error of a difference of sums of independent group means (each group once; a group of one
+    run borrows the largest sample variance of the others) and its Welch-Satterthwaite degrees of freedom."""
+    variances = [_sample_variance(g) if len(g) > 1 else None for g in groups]
+    known = [v for v in variances if v]
+    if not known:
+        return None, None
+    variances = [v if v else max(known) for v in variances]
+    terms = [v / len(g) for v, g in zip(variances, groups)]
+    dfs = [max(len(g) - 1, 1) for g in groups]
+    return math.sqrt(sum(terms)), _satterthwaite(terms, dfs)
+
+
+def larger_drop(rows, paper: str) -> dict:
+    """AR-1's t95 falls by more than AR-4 MP's from 1.6 to 2.0 Umf (Fig. 4): the fall in seconds (mean t95 at 1.6
+    less at 2.0; a run not mixed by its end counted at its end, which makes that family's fall a lower bound)
+    larger for AR-1 by more than t standard errors of the difference of the falls."""
+    claim = "AR-1's mixing time falls more than AR-4's from 1.6 to 2 Umf (Fig. 4)"
+    rule = ("mean t95 at 1.6 Umf less at 2.0 Umf, AR-1's larger than AR-4 MP's by more than t standard errors of the "
+            f"difference ({_margin_words()}); a fall with unmixed runs at 1.6 Umf (counted at their end) is a lower "
+            "bound: it decides only where it passes the other fall so")
+    falls, values, groups = {}, {}, []
+    for family in ("ar1", "ar4_mp"):
+        t, ends = _by_velocity(rows, family, "t95"), _by_velocity(rows, family, "simulated_seconds")
+        if 1.6 not in t or 2.0 not in t or None in t[2.0]:
+            return _verdict(claim, {}, [f"{family}: needs mixed runs at 2.0 Umf and runs at 1.6 Umf"], values, rule,
+                            paper)
+        low = [x if x is not None else e for x, e in zip(t[1.6], ends[1.6])]
+        bounded = None in t[1.6]
+        falls[family] = (_mean(low) - _mean(t[2.0]), bounded)
+        groups += [low, t[2.0]]
+        values[family] = {"fall": falls[family][0], "lower bound": bounded, "runs": [len(low), len(t[2.0])]}
+    error, df = _rise_error(groups)
+    if error is None:
+        return _verdict(claim, {}, ["no replicas: no spread"], values, rule, paper)
+    k = _critical(df)
+    (a, a_bound), (b, b_bound) = falls["ar1"], falls["ar4_mp"]
+    values["difference"] = {"seconds": a - b, "t errors": k * error}
+    if a - b > k * error and not b_bound:
+        return _verdict(claim, {2.0: True}, [], values, rule, paper)
+    if b - a > k * error and not a_bound:
+        return _verdict(claim, {2.0: False}, [], values, rule, paper)
+    return _verdict(claim, {}, ["the falls within their noise, or the larger only bounded"], values, rule, paper)
+
+
+PAPER = {
+    "fig3": "§5.1: \"From Fig. 3 clear differences between AR-1 and AR-4 particles can be observed for 1.6 and "
+            "1.7Umf where AR-4 particles show considerably higher mixing entropy values and therefore more "
+            "intensive mixing.\" (Fig. 3)",
+    "fig9": "§5.2: \"From Fig. 9 (a) it can be observed that cases with all hydrodynamic forces considered (full "
+            "lines in Fig. 9) show higher mixing entropies than cases where only the drag force is considered\"; "
+            "\"for 1.6Umf, 1.7Umf and 2Umf simulations with lift and torque show lower mixing times.\" (Fig. 9)",
+    "mp_sp": "§6: \"the mixing times for cases with multi-particle correlations at higher gas velocities "
+             "(> 2.3Umf) have slightly lower mixing times compared to the cases with single particle "
+             "correlations\" (Fig. 4)",
+    "terminal": "§6: \"between 2Umf and 2.3Umf the fluidized bed already reaches a terminal mixing velocity\"; "
+                "§5.2: \"after 2Umf we do not see any effect of varying gas velocity (Figs. 3 and 4)\"",
+    "expansion": "§5.1: \"It seems that for the same gas velocity (U/Umf), AR-4 particles have a higher bed "
+                 "expansion with more vigorous mixing\" (Figs. 5, 6; the dense bed of Fig. 8)",
+    "first_step": "§5.1: \"varying the gas velocity between 1.6Umf and 2Umf leads to a considerable change in "
+                  "mixing entropy. This is particularly the case when changing from 1.6Umf to 1.7Umf.\" (Fig. 2)",
+    "drop": "§5.1: \"The effect of gas velocity on the mixing time is considerably higher for AR-1 particles than "
+            "for AR-4 particles in the range between 1.6Umf and 2Umf.\" (Fig. 4)",
+}
+
+
+def second_readings(rows: list, whole: list) -> list:
+    """The second set of findings from the study's table rows (the same runs the first set counts: ``rows`` its
+    t95 rows, ``whole`` those of the bed expansion)."""
+    rows = _tall_columns(_told_rows(_t95_runs(rows)))[0]
+    mp_sp = _compare(rows, "ar4_mp", "ar4_sp", lambda v: v > 2.3 + 1e-9,
+                     "AR-4 MP mixes faster than SP above 2.3 Umf (second reading: the paper's conclusion)")
+    return [
+        entropy_higher(rows, "ar4_mp", "ar1", (1.6, 1.7), "AR-4 (MP) mixes faster than AR-1 at 1.6 and 1.7 Umf "
+                       "(second reading: the entropy curves, Fig. 3)", PAPER["fig3"]),
+        entropy_higher(rows, "ar4_mp", "ar4_mp_drag", (1.6, 1.7, 2.0), "lift and torque raise AR-4's mixing up to "
+                       "2 Umf (second reading: the entropy curves, Fig. 9 a)", PAPER["fig9"]),
+        {**mp_sp, "rule": f"{mp_sp.get('rule', '')}; the paper: {PAPER['mp_sp']}", "readings": "second",
+         "fixed": FIXED},
+        little_change(rows, "ar1", PAPER["terminal"]),
+        little_change(rows, "ar4_mp", PAPER["terminal"]),
+        dense_expansion(_tall_columns(_told_rows(whole))[0], PAPER["expansion"]),
+        largest_change_first(rows, ("ar1", "ar4_mp", "ar4_sp"), PAPER["first_step"]),
+        larger_drop(rows, PAPER["drop"]),
+    ]
+
+
+LATER_READINGS.append(second_readings)
