@@ -25,19 +25,19 @@ from __future__ import annotations
 
 import re
 
-from .checks import _did_you_mean, _problem
+from .checks import _did_you_mean, _integer, _priority_of, _problem, _replicas, _seconds
 from .design import DesignError, two_level
 
 FACTOR_KEYS = {"low", "high", "centre", "doc"}
 RESPONSE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(@[0-9]+(\.[0-9]*)?)?$")  # column, or series column@time
 
 
-def designed_runs(spec, settings: dict, duration, replicas: int, report: str, entry, bed_names: set, replica_bed,
-                  out, problems: list) -> tuple[list, dict | None]:
-    """The runs of a ``[design]`` table (``spec``) and its record for ``study.json``; every problem (key path,
-    value, what is allowed) appended to ``problems``. ``entry``, ``replica_bed``: the study reader's own (a
-    family's case and overrides; a replica's bed)."""
-    from .sweep import RunSpec, _integer, _priority_of, _replicas, _seconds
+def designed_runs(spec, settings: dict, duration, replicas: int, entry, bed_names: set, out,
+                  problems: list) -> tuple[list, dict | None]:
+    """The runs of a ``[design]`` table (``spec``), each as the keyword arguments of a ``sweep.RunSpec`` (its
+    ``bed`` the first replica's: the study reader gives replica k its own), and the design's record for
+    ``study.json``; every problem (key path, value, what is allowed) appended to ``problems``. ``entry``: the
+    study reader's (a family's case and overrides)."""
     if not isinstance(spec, dict):
         _problem(problems, "design", spec, "a table ([design] with case, factors, ...)")
         return [], None
@@ -141,10 +141,10 @@ def designed_runs(spec, settings: dict, duration, replicas: int, report: str, en
             overrides["time.end"] = run_duration
             if design_replicas > 1 and bed is None:
                 overrides["particles.insertion.seed"] = replica
-            runs.append(RunSpec(f"{point_name}_r{replica}", name, case_path, overrides, str(out / "runs" / f"{point_name}_r{replica}"),
-                                replica_bed(bed, replica) if bed is not None else None,
-                                {f"design.{f}": c for f, c in coded.items()}, run_duration, replica, report,
-                                priority=priority - (replica - 1)))
+            run = f"{point_name}_r{replica}"
+            runs.append(dict(name=run, family=name, case=case_path, overrides=overrides, folder=str(out / "runs" / run),
+                             bed=bed, point={f"design.{f}": c for f, c in coded.items()}, duration=run_duration,
+                             replica=replica, priority=priority - (replica - 1)))
     record = {"name": name, "label": design.label(), "letters": letters_of, "generators": list(design.generators),
               "defining_relation": design.defining_relation(), "resolution": design.resolution,
               "factors": {f: {"letter": letters_of[f], **{k: v for k, v in factors[f].items() if k in FACTOR_KEYS}}

@@ -9,8 +9,10 @@ from pathlib import Path
 
 from ..case import CaseError, load_case, to_toml
 from ..io.run_folder import physics_fingerprint
-from .checks import _did_you_mean, _problem, _table, read_toml
+from .checks import (PRIORITY_SPAN, REPLICAS_SPAN, _did_you_mean, _integer, _priority_of, _problem,  # noqa: F401
+                     _replicas, _seconds, _table, read_toml)
 from .cluster import check_cluster
+from .designed import designed_runs
 from .reports import DEFAULT_REPORT, REPORTS, report_for
 
 
@@ -24,7 +26,6 @@ FAMILY_KEYS = BED_KEYS | {"bed", "duration", "replicas", "priority"}  # a [famil
 DESIGN_KEYS = FAMILY_KEYS | {"name", "factors", "generators", "fraction", "centre_points", "responses", "censored",
                             "confidence"}  # the [design] table's (``fvdem.study.designed``)
 POINT_KEYS = ("duration", "replicas", "priority")  # what a [[points]] table sets ([[durations]]: duration)
-REPLICAS_SPAN, PRIORITY_SPAN = (1, 1000), (-1000, 1000)  # the integers ``replicas`` and ``priority`` take
 
 
 @dataclass(frozen=True)
@@ -207,12 +208,12 @@ def study_from_table(table: dict, path, out) -> Study:
                                     replica, report, priority=point_priority))
     design = None
     if "design" in table:
-        from .designed import designed_runs
-        design_runs, design = designed_runs(table["design"], settings, duration, replicas, report, entry, bed_names,
-                                            replica_bed, out, problems)
+        design_runs, design = designed_runs(table["design"], settings, duration, replicas, entry, bed_names, out,
+                                            problems)
         if design is not None and design["name"] in families:
             _problem(problems, "design.name", design["name"], "a name no family has (it names the design's runs)")
-        runs += design_runs
+        runs += [RunSpec(**{**spec, "report": report, "bed": replica_bed(spec["bed"], spec["replica"])
+                            if spec["bed"] is not None else None}) for spec in design_runs]
     _check_names(runs, beds, problems)
     cluster = _table(table, "cluster", problems)
     check_cluster(cluster, problems)
@@ -311,37 +312,6 @@ def _exclusions(tables, families: dict, axes: dict, problems) -> list:
         elif _selectors_known(spec, where, families, axes, {"family", *axes}, problems):
             out.append(_selecting(spec))
     return out
-
-
-def _seconds(value, path: str, problems) -> bool:
-    """Whether ``value`` is a number of simulated seconds (0 < value < 1e6); else a problem at ``path``."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < 1e6:
-        return True
-    _problem(problems, path, value, "a number of simulated seconds > 0")
-    return False
-
-
-def _replicas(table: dict, path: str, default: int, problems) -> int:
-    """``table``'s ``replicas`` (``default`` when absent): an integer 1-1000, else a problem and 1."""
-    return _integer(table, "replicas", path, default, REPLICAS_SPAN, 1, problems)
-
-
-def _priority_of(table: dict, path: str, problems) -> int:
-    """``table``'s ``priority`` (0 when absent): an integer -1000-1000, else a problem and 0."""
-    return _integer(table, "priority", path, 0, PRIORITY_SPAN, 0, problems,
-                    " (the queue's tier: higher first, 0 by default)")
-
-
-def _integer(table: dict, key: str, path: str, default: int, span: tuple, fallback: int, problems,
-             why: str = "") -> int:
-    """``table[key]`` (``default`` when absent): an integer within ``span`` (a bool is not one), else a problem at
-    ``path`` ("an integer <low>-<high>" and ``why``) and ``fallback``."""
-    value = table.get(key, default)
-    low, high = span
-    if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
-        _problem(problems, path, value, f"an integer {low}-{high}{why}")
-        return fallback
-    return value
 
 
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")  # a run's or bed's folder name
