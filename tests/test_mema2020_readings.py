@@ -95,3 +95,24 @@ def test_the_first_rules_verdicts_on_the_committed_archive_are_unchanged_and_the
     assert findings[:len(first)] == first  # the first set, word for word
     second = findings[len(first):]
     assert len(second) == 8 and all(f["readings"] == "second" and "the paper: " in f["rule"] for f in second)
+
+
+def test_the_contact_settings_rule_tells_differ_agree_or_open():
+    def shape(defaults, paper, t_def, t_pap, w_def, w_pap):
+        return (_rows(defaults, 2.0, t95=t_def, window=w_def) + _rows(paper, 2.0, t95=t_pap, window=w_pap))
+    same = [5.0, 5.1, 4.9, 5.05, 4.95, 5.0, 5.1, 4.9]
+    rows = (shape("ar1_t95", "ar1_paper", same, [5.0, 5.02, 4.98], [0.76] * 4 + [0.75] * 4, [0.76, 0.755, 0.757])
+            + shape("ar4_mp_t95", "ar4_mp_paper", same, [3.0, 3.1, 2.9], [0.76] * 4 + [0.75] * 4, [0.85, 0.86, 0.84]))
+    result = readings.contact_settings(rows)
+    assert result["shapes"]["AR-1"]["verdict"] == "agree" and result["shapes"]["AR-4 MP"]["verdict"] == "differ"
+    assert result["shapes"]["AR-4 MP"]["t95"]["order"] == "lower" and result["shapes"]["AR-1"]["t95"]["runs"] == [3, 8]
+    unmixed = rows + _rows("ar1_paper", 2.0, t95=[None], window=[0.7], ends=[8.0])
+    assert readings.contact_settings(unmixed)["shapes"]["AR-1"]["verdict"] == "open"
+
+
+def test_the_contact_decision_tool_refuses_a_folder_that_is_no_archive(tmp_path):
+    import subprocess
+    import sys
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / "contact_decision.py"), "--archives", str(tmp_path)],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "not a study archive" in result.stderr and "Traceback" not in result.stderr

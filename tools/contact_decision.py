@@ -1,0 +1,53 @@
+"""The contact settings, decided (issue 66, item 3): fvdem's defaults against Mema et al.'s own contact stiffness
+and steps, per shape at 2.0 Umf, from the committed archives of the paper's study (the defaults' replicas) and of
+``studies/contact_paper.toml`` (the paper's settings), by the rule ``fvdem.study.mema2020_readings.contact_settings``
+(fixed before the runs it judges).
+
+    python tools/contact_decision.py --archives docs/data/mema2020 docs/data/contact_paper --json
+
+Each archive's report is rebuilt in a scratch copy first (its table with the entropy columns); the last line is
+one JSON object: per shape, each measure's means at both settings, their runs and order, and the verdict."""
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+from fvdem.study import report
+from fvdem.study.mema2020_readings import contact_settings
+
+
+def table_rows(archive: Path) -> list:
+    """The table rows of an archive (its report rebuilt in a scratch copy), the runs it plans."""
+    with tempfile.TemporaryDirectory() as scratch:
+        copy = Path(scratch) / archive.name
+        shutil.copytree(archive, copy)
+        report(copy)
+        rows = json.loads((copy / "table.json").read_text())
+    return [r for r in rows if r["status"] != "not planned"]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--archives", nargs="+", type=Path, required=True,
+                        help="study archives (fvdem study DIR --archive) holding both settings' runs")
+    parser.add_argument("--velocity", type=float, default=2.0, help="U/Umf of the comparison (default 2.0)")
+    parser.add_argument("--json", action="store_true", help="print only the JSON object")
+    args = parser.parse_args(argv)
+    missing = [str(a) for a in args.archives if not (a / "study.json").exists()]
+    if missing:
+        parser.exit(2, f"--archives: {', '.join(missing)}: not a study archive (no study.json)\n")
+    rows = [r for archive in args.archives for r in table_rows(archive)]
+    result = contact_settings(rows, args.velocity)
+    if not args.json:
+        for shape, entry in result["shapes"].items():
+            print(f"{shape}: {entry['verdict']}; t95 {entry['t95']['paper']} (paper's settings) against "
+                  f"{entry['t95']['defaults']} (defaults), {entry['t95']['order']}")
+    print(json.dumps(result))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
