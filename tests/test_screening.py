@@ -211,3 +211,14 @@ def test_a_designed_study_runs_and_its_screening_recovers_the_known_effects(tmp_
         assert [e["term"] for e in again["effects"]] == [e["term"] for e in result["effects"]]
         for e, f in zip(result["effects"], again["effects"]):
             assert f["estimate"] == pytest.approx(e["estimate"], rel=1e-4, abs=1e-6) and f["decided"] == e["decided"]
+
+
+def test_an_effect_within_its_interval_of_mattering_says_how_many_replicas_would_tell_it():
+    """Within its interval of mattering (reaching both 0 and 10 % of the mean): the interval's half-width
+    shrinks as 1/sqrt(replicas) until it clears 0; 0.7 about 0.5 at 2 replicas a point: 2 (0.7 / 0.5)^2 = 3.9."""
+    from fvdem.study.design import Effect
+    from fvdem.study.screening import _to_tell
+    assert _to_tell(Effect("A", (), 0.5, 0.3, -0.2, 1.2), mean=5.0, replicas=2) == {"undecided": True,
+                                                                                   "replicas_to_tell": 4}
+    assert _to_tell(Effect("A", (), 0.01, 0.01, -0.01, 0.03), 5.0, 2)["undecided"] is False  # inside +- 0.5: none
+    assert _to_tell(Effect("A", (), 2.0, 0.3, 1.4, 2.6), 5.0, 2) == {"undecided": False, "replicas_to_tell": None}

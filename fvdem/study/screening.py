@@ -89,7 +89,8 @@ def screening(out, design: dict, rows: list, series: dict) -> list:
             at_high = sum(1 for r, c in zip(factorial, column) if c > 0 and r["name"] in cut)
             effects.append({"term": e.term, "factors": [factor_of[x] for x in e.term], "aliases": list(e.aliases),
                             "estimate": e.estimate, "se": e.se, "low": e.low, "high": e.high, "t": e.t,
-                            "decided": e.decided(), "censored_low": at_low, "censored_high": at_high})
+                            "decided": e.decided(), "censored_low": at_low, "censored_high": at_high,
+                            **_to_tell(e, analysis.mean, len(factorial) / len(points))})
         result.update({"mean": analysis.mean, "error": analysis.error, "error_df": analysis.error_df,
                        "sigma": analysis.sigma, "confidence": analysis.confidence, "effects": effects})
         if centre:
@@ -101,6 +102,24 @@ def screening(out, design: dict, rows: list, series: dict) -> list:
     (out / SCREENING_FILE).write_text(json.dumps(record, indent=1) + "\n")
     (out / SCREENING_PAGE).write_text(screening_page(record, paths))
     return paths + [out / SCREENING_FILE, out / SCREENING_PAGE]
+
+
+MATTERS = 0.10  # an effect of this share of the response's mean matters (docs/bed-dynamics.md's rule 2)
+
+
+def _to_tell(effect, mean: float, replicas: float) -> dict:
+    """Whether an untold effect lies within its interval of mattering (the interval reaches both zero and
+    ``MATTERS`` of the mean: ``undecided``), and about how many replicas a point would tell it either way if the
+    estimate and the spread stay (``replicas_to_tell``: the interval's half-width shrinks as 1/sqrt(replicas),
+    until it clears zero or, for an effect smaller than what matters, until it falls inside +- that size)."""
+    if effect.low is None or effect.decided():
+        return {"undecided": False, "replicas_to_tell": None}
+    size = MATTERS * abs(mean)
+    undecided = effect.low < 0 < effect.high and (effect.high > size or effect.low < -size)
+    half = (effect.high - effect.low) / 2
+    target = abs(effect.estimate) if abs(effect.estimate) > size / 2 else size - abs(effect.estimate)
+    need = None if target <= 0 or half <= 0 else math.ceil(replicas * (half / target) ** 2)
+    return {"undecided": undecided, "replicas_to_tell": need if undecided else None}
 
 
 def _file_safe(response: str) -> str:
@@ -178,7 +197,8 @@ def screening_page(record: dict, figures: list) -> str:
                   "t | told | censored (low/high) |", "|---|---|---|---|---|---|---|"]
         for e in sorted(result["effects"], key=lambda e: -abs(e["t"] if e["t"] is not None else e["estimate"])):
             interval = "-" if e["low"] is None else f"{_number(e['low'])} to {_number(e['high'])}"
-            told = "yes" if e["decided"] else "no"
+            told = "yes" if e["decided"] else (f"within its interval of mattering: about {e['replicas_to_tell']} "
+                                               "replicas a point would tell" if e.get("undecided") else "no")
             cut = f"{e['censored_low']}/{e['censored_high']}" if e["censored_low"] or e["censored_high"] else "-"
             lines.append(f"| {_term_label(e)} | {', '.join(e['factors'])} | {_number(e['estimate'])} | {interval} | "
                          f"{_number(e['t'])} | {told} | {cut} |")
