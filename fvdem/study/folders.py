@@ -15,7 +15,8 @@ from pathlib import Path
 
 from ..case import load_case
 from ..io.run_folder import physics_changes, physics_fingerprint
-from .sweep import BED_STATE, BedSpec
+from .records import RunState, classify_run, entry_folder
+from .specs import BED_STATE, BedSpec
 
 SUPERSEDED = "superseded"  # in a study folder or its archive: folders of an older definition of a run
 
@@ -47,22 +48,18 @@ def unplanned_folders(study, out) -> list:
     """``(name, folder)`` of each run ``out/study.json`` lists that ``study`` no longer plans (neither among its
     runs nor those ``--only`` left out), whose folder holds something and which has not ended (an ended run is a
     result: it stays). The runner never starts these; ``supersede`` (with ``keys`` None) moves them aside."""
-    from .status import _run_status
-    from .reports import report_for
-    from .tasks import entry_folder
     index_path = Path(out) / "study.json"
     if not index_path.exists():
         return []
     index = json.loads(index_path.read_text())
     planned = {r.name for r in (*study.runs, *study.left_out)}
-    chosen = report_for(index.get("report"))
     found = []
     for entry in index.get("runs", []):
         folder = entry_folder(out, entry) if entry.get("folder") else None
         if entry["name"] in planned or folder is None or not folder.is_dir():
             continue
-        state = _run_status(Path(out), {**entry, "planned": False}, chosen)[0]["state"]
-        if state not in ("ended", "running"):
+        state = classify_run(folder, {**entry, "planned": False})
+        if state not in (RunState.ENDED, RunState.RUNNING):
             found.append((entry["name"], str(folder)))
     return found
 

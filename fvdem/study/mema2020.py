@@ -13,8 +13,8 @@ from dataclasses import replace
 
 from ..analysis.plots import COLOUR_LAYERS
 from ..scenes.observables import colour_layer_record
-from .reports import StudyReport, register_report
-from .tasks import ENDED, FAILED, IN_PROGRESS, _folder_case
+from .records import ENDED, FAILED, IN_PROGRESS, folder_case
+from .registry import StudyReport, register_report
 
 
 # s: the window of the bed's height and of its channels, the same in every run whatever its length (8 s,
@@ -140,7 +140,7 @@ def _roof_share(series, roof: float | None, record: dict | None):
 
 def _gas(folder: Path):
     """The gas settings of a run's case.toml; None without a readable one."""
-    case = _folder_case(folder)
+    case = folder_case(folder)
     return None if case is None else case.gas
 
 
@@ -1434,7 +1434,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), the
     void fractions' binarity and the largest overlap's median, 99th percentile and maximum (``_overlaps``)."""
     record = void_fraction_record(folder) if r["status"] != FAILED else None
-    case = _folder_case(folder)
+    case = folder_case(folder)
     gas, roof = (None, None) if case is None else (case.gas, case.domain.upper[2])
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
     fastest = _window_mean(series, "gas_max_speed", ramp)
@@ -1497,7 +1497,7 @@ def channel_record(folder, window: tuple | None = None) -> dict | None:
             return None
         record = json.loads(stored.read_text())
         return {**record, "rows": [r for r in record["rows"] if wanted(r["time"])]}
-    case = _folder_case(folder)
+    case = folder_case(folder)
     if case is None:
         return None
     lower, upper, cells = case.domain.lower, case.domain.upper, tuple(case.gas.cells)

@@ -16,70 +16,17 @@ from __future__ import annotations
 import json
 import re
 import statistics
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from ..io.locks import LOCK_FILE
 from ..io.run_folder import write_text_atomic
 from ..provenance import processor_of
-from .tasks import ENDED, FAILED, IN_PROGRESS, NOT_PLANNED, _simulated_so_far, entry_folder
-
-
-@dataclass(frozen=True)
-class StudyReport:
-    """What a study's report makes of its runs (each hook optional: ``None`` leaves the generic part alone)."""
-
-    name: str
-    summary: str
-    run_values: Callable[[dict], dict] | None = None  # summary.json -> values study.json keeps per run
-    headline: Callable[[dict], str] | None = None  # a finished run's result -> its progress-line detail
-    live: Callable[[dict], dict] | None = None  # time series of a run in progress -> summary-like values
-    columns: Callable[[dict, Path, dict, dict | None], dict] | None = None  # (run, folder, data, series) -> columns
-    figures: Callable[[Path, list], list] | None = None  # (study folder, runs with a time series) -> PNG paths
-    table_figures: Callable[[Path, list], list] | None = None  # (study folder, the table's rows) -> PNG paths
-    findings: Callable[[list], list] | None = None  # table rows -> findings.json
-    plan: Callable[[list, list, str | None], str] | None = None  # (rows, findings, study name) -> plan.toml
-    archived_columns: tuple = ()  # time-series columns an archive keeps besides ``time``
-    archived_summary: tuple = ()  # summary keys an archive keeps besides ``ARCHIVED_SUMMARY``
-    archive_extra: Callable[[Path, Path], None] | None = None  # (run folder, its archive folder): extra files
-    archive_files: tuple = ()  # the files ``archive_extra`` may write: one an archived run lacks is made again
-    watch: tuple = ()  # time-series columns whose last value ``fvdem study --status`` shows per run
-
-
-REPORTS: dict[str, StudyReport] = {}
-DEFAULT_REPORT = "mema2020"
-REPORT_MODULES = ("mema2020", "mema2020_readings")  # modules of this package that register reports, imported on first use
-
-
-def register_report(report: StudyReport) -> StudyReport:
-    """Make ``report`` available to study files (``report = "<name>"``)."""
-    REPORTS[report.name] = report
-    return report
-
-
-def report_for(name: str | None) -> StudyReport:
-    """The registered report ``name`` (the default for None); ``report_for(None)`` also fills ``REPORTS``."""
-    import importlib
-    for module in REPORT_MODULES:  # each once (imported modules are cached)
-        importlib.import_module(f"{__package__}.{module}")
-    return REPORTS[name or DEFAULT_REPORT]
-
-
-register_report(StudyReport("table", "the generic table: status, simulated and wall seconds, replica of each run"))
+from .records import ENDED, FAILED, IN_PROGRESS, NOT_PLANNED, entry_folder, read_series, simulated_so_far
+from .registry import DEFAULT_REPORT, REPORT_MODULES, REPORTS, StudyReport, register_report, report_for  # noqa: F401
 
 
 # --------------------------------------------------------------------------- the report of a study folder
-def _series(folder: Path):
-    """A run's time series (``read_timeseries``), or None while it has none or only its header."""
-    from ..analysis.plots import read_timeseries
-    if not (folder / "timeseries.csv").exists():
-        return None
-    try:
-        series = read_timeseries(folder)
-    except (IndexError, ValueError):  # a run that has written its header only
-        return None
-    return series if len(series.get("time", ())) else None
+_series = read_series  # the name the engine's modules knew it by
 
 
 def _so_far(series, chosen: StudyReport) -> dict:
@@ -329,7 +276,7 @@ def archive(out, dest) -> list:
             runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}", "simulated_seconds": 0.0})
             _refresh_duration(runs[r["name"]], r)
             continue
-        held = _simulated_so_far(target, live=True) if target.exists() else -1.0
+        held = simulated_so_far(target, live=True) if target.exists() else -1.0
         columns = [c for c in dict.fromkeys(("time", *chosen.archived_columns, *_design_series(index))) if c in series]
         if float(series["time"][-1]) < held or float(series["time"][-1]) == held and not _lacks(target, columns):
             # what the archive holds is as far along (a later invocation lost nothing); the study's word on
@@ -382,7 +329,7 @@ def _supersede_archived(target: Path, entry: dict, dest: Path, folder: Path) -> 
     from ..io.run_folder import case_text_changes, physics_fingerprint
     from ..provenance import describe, provenance
     from .folders import supersede
-    from .sweep import BED_STATE
+    from .specs import BED_STATE
     if not entry.get("physics") or not (target / "case.toml").exists():
         return None
     held = (target / "case.toml").read_text()

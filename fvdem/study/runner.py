@@ -15,9 +15,9 @@ from ..case import CaseError, load_case
 from ..io.locks import FolderLock
 from ..io.run_folder import write_text_atomic
 from .cluster import close_client, make_client, worker_count
-from .reports import report_for
+from .registry import report_for
 from .status import _clock, study_status
-from .sweep import BedSpec, RunSpec, Study
+from .specs import BedSpec, RunSpec, Study
 from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, entry_folder,
                     prepare_bed, run_finished, run_task)
 

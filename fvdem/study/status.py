@@ -20,8 +20,9 @@ from pathlib import Path
 from ..io.locks import describe_holder, holder
 from ..io.run_folder import CHECKPOINT, FINAL_STATE
 from ..provenance import UNRECORDED_CPU, processor_of
-from .reports import _series, report_for
-from .tasks import FAILED, NOT_PLANNED, _folder_case, _simulated_so_far, _summary, entry_folder
+from .records import (NOT_PLANNED, classify_run, entry_folder, folder_case, read_series, read_summary,
+                      simulated_so_far)
+from .registry import report_for
 
 # a run's state in the status: at its end; a process writing it now; a checkpoint it resumes from; results
 # without a checkpoint (an archive's copy of a run in progress, a run stopped before its first checkpoint: it
@@ -131,14 +132,14 @@ def _bed_status(folder: Path) -> dict:
     """A bed's folder in the study's ``beds/`` (beds the study has not begun have none yet; an archive keeps none):
     ``{"name", "state" (``BED_STATES``), "simulated_seconds", "cpu_seconds"}``. Beds settle before the runs that
     start from them: a study whose runs wait with none running is settling their beds."""
-    summary = _summary(folder) or {}
+    summary = read_summary(folder) or {}
     if holder(folder) is not None:
         state = "settling"
     elif (folder / FINAL_STATE).exists() and summary and not summary.get("stopped_early"):
         state = "settled"
     else:
         state = "in progress" if (folder / CHECKPOINT).exists() else "begun"
-    return {"name": folder.name, "state": state, "simulated_seconds": _simulated_so_far(folder, live=True),
+    return {"name": folder.name, "state": state, "simulated_seconds": simulated_so_far(folder, live=True),
             "cpu_seconds": summary.get("cpu_seconds")}
 
 
@@ -219,7 +220,7 @@ def _expect(runs: list, entries: list, folders: list) -> None:
         if "stop_after_mixed" in entry:
             known, stop = True, entry["stop_after_mixed"]
         else:
-            case = _folder_case(folder)
+            case = folder_case(folder)
             known, stop = case is not None, None if case is None else case.time.stop_after_mixed
         # an unmixed run that ended before this one's duration (one cut short) bounds its t95 from below only
         kin = [t95 for t95, held in ended.get(entry.get("physics"), ()) if t95 is not None or held >= end]
@@ -246,26 +247,12 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
     """One run's row (``study_status``), and the CPU seconds and simulated seconds its summary measured (None
     without), which the family's rate sums."""
     folder = entry_folder(out, r)
-    summary = _summary(folder) or {}
-    series = _series(folder)
+    summary = read_summary(folder) or {}
+    series = read_series(folder)
     held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
     duration = r.get("duration")
-    at_end = bool(summary) and not summary.get("stopped_early") and (
-        bool(summary.get("ended")) or duration is None
-        or float(summary.get("simulated_time") or 0.0) >= duration * (1 - 1e-9))
     writer = holder(folder)
-    if writer is not None:
-        state = "running"
-    elif at_end and held <= float(summary.get("simulated_time") or 0.0) + 1e-9:
-        state = "ended"
-    elif r.get("status") == FAILED:
-        state = "failed"
-    elif held > 0:
-        state = "in progress" if (folder / CHECKPOINT).exists() else "partial"
-    else:
-        state = "not started"
-    if r.get("planned") is False and state not in ("ended", "running"):
-        state = NOT_PLANNED  # out of the study file: nothing left of it is counted
+    state = classify_run(folder, r, summary, series).value
     if state == "ended":
         values = chosen.run_values(summary) if chosen.run_values else {}
     elif series is not None and chosen.live and chosen.run_values:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import itertools
 import re
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 from ..case import CaseError, load_case, to_toml
@@ -13,11 +13,9 @@ from .checks import (PRIORITY_SPAN, REPLICAS_SPAN, _did_you_mean, _integer, _pri
                      _replicas, _seconds, _table, read_toml)
 from .cluster import check_cluster
 from .designed import designed_runs
-from .reports import DEFAULT_REPORT, REPORTS, report_for
+from .registry import DEFAULT_REPORT, REPORTS, report_for
+from .specs import BED_STATE, BedSpec, RunSpec, Study
 
-
-# a run's starting state: the study gives it its bed's final state when the bed has settled (not a change of physics)
-BED_STATE = ("particles.initial_state",)
 
 STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds", "families", "axes", "exclude",
               "durations", "points", "cluster", "report", "design"}
@@ -26,48 +24,6 @@ FAMILY_KEYS = BED_KEYS | {"bed", "duration", "replicas", "priority"}  # a [famil
 DESIGN_KEYS = FAMILY_KEYS | {"name", "factors", "generators", "fraction", "centre_points", "responses", "censored",
                             "confidence"}  # the [design] table's (``fvdem.study.designed``)
 POINT_KEYS = ("duration", "replicas", "priority")  # what a [[points]] table sets ([[durations]]: duration)
-
-
-@dataclass(frozen=True)
-class RunSpec:
-    """One run of a study: where its case is, what it changes, and where it writes."""
-
-    name: str
-    family: str
-    case: str  # path of the base case file
-    overrides: dict
-    folder: str
-    bed: str | None = None  # name of the bed it starts from
-    point: dict = field(default_factory=dict)  # the axes' values of this run
-    duration: float = 0.0  # simulated seconds (the study's, or its family's own)
-    replica: int = 1  # 1, 2, ...: replica k >= 2 starts from its own bed (insertion seed + k - 1)
-    report: str = DEFAULT_REPORT  # the study's report: which values of its summary the run's result carries
-    physics: str = ""  # its case's physics_fingerprint (its bed's state aside): tells a folder of an older case
-    priority: int = 0  # the queue's tier among runs not started, higher first (``priority`` of its family or point)
-    stop_after_mixed: float | None = None  # its case's time.stop_after_mixed (the index lists it for --status)
-
-
-@dataclass(frozen=True)
-class BedSpec:
-    name: str
-    case: str
-    overrides: dict
-    folder: str
-    replica: int = 1  # the replica whose runs start from it (``_bed_priority``)
-    physics: str = ""  # its case's physics_fingerprint
-
-
-@dataclass(frozen=True)
-class Study:
-    name: str
-    path: str
-    duration: float
-    beds: tuple
-    runs: tuple
-    cluster: dict
-    report: str = DEFAULT_REPORT  # a registered report (``fvdem.study.reports``): the study's table, figures, findings
-    left_out: tuple = ()  # the runs (``RunSpec``) a selection (``--only``) left out: the index lists them too
-    design: dict | None = None  # a ``[design]``'s record (``designed_runs``): factors, aliases, responses
 
 
 def load_study(path, out) -> Study:

@@ -11,50 +11,21 @@ from ..case import CaseError, load_case
 from typing import TYPE_CHECKING
 
 from .cluster import job_deadline
+from .records import (ENDED, FAILED, IN_PROGRESS, NOT_PLANNED, entry_folder, folder_case, last_time,  # noqa: F401
+                      read_summary, simulated_so_far)
 
 if TYPE_CHECKING:
-    from .sweep import BedSpec, RunSpec
+    from .specs import BedSpec, RunSpec
+
+# the names the engine's modules knew these by
+_summary, _folder_case, _simulated_so_far, _last_time = read_summary, folder_case, simulated_so_far, last_time
 
 
 STOP_FILE = "STOP"  # in a study folder: running runs checkpoint and stop, queued ones do not start
 
-# A run's status (study.json, the table): a task's result says "finished" or "resumed" (it reached its end in
-# this call), "skipped" (it had before), "stopped" or "paused" (checkpointed before its end: the study's stop
-# file, its job's walltime) or "failed" (with the cause); the study lists a run without a result "pending";
-# the report derives "running" (its time series has passed its summary), "pending" (it ended before its
-# duration was raised) and "not planned" (the study file no longer lists it, its folder holds something and it
-# has not ended: ``write_index`` flags its entry ``"planned": false``; neither counted nor drawn)
-ENDED = ("finished", "resumed", "skipped")
-IN_PROGRESS = ("pending", "stopped", "paused", "running")
-FAILED = "failed"
-NOT_PLANNED = "not planned"
-
-
 # s: how long a worker past its job's deadline holds a run it cannot start before it gives it back; the study
 # retires such a worker (``_retire``), so this only paces the returns when Dask declined to retire it
 PAUSED_RETURN_DELAY = 2.0
-
-
-def _summary(folder: Path) -> dict | None:
-    """A run folder's ``summary.json`` (None without one, or while it cannot be read: being written)."""
-    try:
-        return json.loads((Path(folder) / "summary.json").read_text())
-    except (OSError, json.JSONDecodeError):
-        return None
-
-
-def entry_folder(out, entry: dict) -> Path:
-    """A run's folder from its ``study.json`` entry: absolute in a study folder's index, relative to the folder
-    ``out`` in an archive's."""
-    return Path(entry["folder"]) if Path(entry["folder"]).is_absolute() else Path(out) / entry["folder"]
-
-
-def _folder_case(folder: Path):
-    """The case a run folder's ``case.toml`` holds (``load_case``: units, defaults); None without a readable one."""
-    try:
-        return load_case(Path(folder) / "case.toml")
-    except (CaseError, OSError):
-        return None
 
 
 def _finished(folder: Path, case) -> bool:
@@ -90,37 +61,6 @@ def _ended_early(folder: Path) -> bool:
 def _study_stop_file(folder) -> Path:
     """``OUT/STOP`` of the study that ``folder`` (``OUT/runs/<name>`` or ``OUT/beds/<name>``) belongs to."""
     return Path(folder).parent.parent / STOP_FILE
-
-
-def _simulated_so_far(folder: Path, live: bool = False) -> float:
-    """Simulated seconds a run folder holds: its summary's, else its checkpoint's (0 for a new run);
-    ``live``: the last line of its time series instead of the checkpoint (a run in progress)."""
-    try:
-        summary = _summary(folder)
-        if summary is not None and not summary.get("stopped_early"):
-            return float(summary["simulated_time"])
-        if live and (folder / "timeseries.csv").exists():
-            return _last_time(folder / "timeseries.csv")
-        if summary is not None:
-            return float(summary["simulated_time"])
-        if (folder / "checkpoint.npz").exists():
-            import numpy as np
-            with np.load(folder / "checkpoint.npz") as data:
-                return float(json.loads(bytes(data["__meta__"]).decode())["time"]) if "__meta__" in data.files else 0.0
-    except (OSError, KeyError, ValueError):
-        pass
-    return 0.0
-
-
-def _last_time(path: Path) -> float:
-    """The time column of a time series' last complete line (read from the end of the file)."""
-    from ..io.run_log import tail_lines
-    for line in reversed(tail_lines(path, 4096)):
-        try:
-            return float(line.split(",", 1)[0])
-        except ValueError:
-            continue
-    return 0.0
 
 
 def _simulate(case_path, overrides, folder, threads, deadline: float | None = None) -> dict:
@@ -184,7 +124,7 @@ class StudyStopped(RuntimeError):
 def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
     """One run of the study; never raises: a failure comes back with its cause. A run that ended carries
     the values of its summary its study's report keeps (``StudyReport.run_values``)."""
-    from .reports import report_for
+    from .registry import report_for
     started = time.perf_counter()
     overrides = dict(run.overrides)
     if bed_state is not None:
