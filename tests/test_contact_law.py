@@ -141,17 +141,25 @@ def test_oblique_wall_impact_respects_coulomb_limit(tangential_speed):
         assert impulse_t == pytest.approx(mu * impulse_n, rel=0.01)
 
 
+def _sphere_on_floor(contact, v0, rolling=False):
+    """A sphere resting on the floor at its static overlap, moving at ``v0`` along x, sliding (no spin) or
+    ``rolling`` (spin v0 / R), its forces computed."""
+    s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
+                    box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
+    m = s.particles.mass[0]
+    s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
+    if rolling:
+        s.particles.angular_momentum[0, 1] = s.particles.inertia[0, 0] * v0 / R
+    s.reference_position[:] = s.particles.position
+    s.compute_forces()
+    return s
+
+
 def test_sliding_sphere_reaches_pure_rolling_at_five_sevenths():
     mu = 0.3
     v0 = 0.5
-    contact = ContactModel(friction=mu, rolling_friction=0.0)
-    s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
-                    box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
-    # settle vertically first would take long; start at the static overlap instead
-    m = s.particles.mass[0]
-    s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
-    s.reference_position[:] = s.particles.position
-    s.compute_forces()
+    # settling vertically first would take long: start at the static overlap instead
+    s = _sphere_on_floor(ContactModel(friction=mu, rolling_friction=0.0), v0)
     slide_time = 2 * v0 / (7 * mu * 9.81)  # analytical time to reach rolling
     s.step(int(1.5 * slide_time / s.dt))
     v = by_id(s, "velocity")[0, 0]
@@ -165,13 +173,7 @@ def test_rolling_friction_decelerates_rolling_sphere():
     mu_r = 0.05
     contact = ContactModel(friction=0.5, rolling_friction=mu_r)
     v0 = 0.3
-    s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
-                    box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
-    m = s.particles.mass[0]
-    s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
-    s.particles.angular_momentum[0, 1] = s.particles.inertia[0, 0] * v0 / R
-    s.reference_position[:] = s.particles.position
-    s.compute_forces()
+    s = _sphere_on_floor(contact, v0, rolling=True)
     t = 0.05
     s.step(int(t / s.dt))
     v = by_id(s, "velocity")[0, 0]
@@ -332,13 +334,7 @@ def test_a_wall_friction_of_its_own_sets_the_sliding_time_on_the_wall(mu_wall):
     """``wall_friction``: a sphere sliding on the floor reaches rolling at 5/7 v0 after 2 v0 / (7 mu_w g), the wall's
     coefficient, not the particles' (0.8 here; the particle-particle law is untouched: no pair exists)."""
     v0 = 0.5
-    contact = ContactModel(friction=0.8, rolling_friction=0.0, wall_friction=mu_wall)
-    s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
-                    box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
-    m = s.particles.mass[0]
-    s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
-    s.reference_position[:] = s.particles.position
-    s.compute_forces()
+    s = _sphere_on_floor(ContactModel(friction=0.8, rolling_friction=0.0, wall_friction=mu_wall), v0)
     slide_time = 2 * v0 / (7 * mu_wall * 9.81)
     s.step(int(0.5 * slide_time / s.dt))  # half-way: still sliding, decelerated at mu_w g
     assert by_id(s, "velocity")[0, 0] == pytest.approx(v0 - mu_wall * 9.81 * 0.5 * slide_time, rel=0.02)
@@ -356,14 +352,8 @@ def test_the_wall_coefficients_default_to_the_particles_and_a_wall_rolling_frict
     v0, t = 0.3, 0.05
     ends = []
     for mu_rw in (0.05, 0.0):
-        contact = ContactModel(friction=0.5, rolling_friction=0.3, wall_rolling_friction=mu_rw)
-        s = make_system([[0.02, 0.05, R]], R, velocity=[[v0, 0, 0]], contact=contact, gravity=(0, 0, -9.81),
-                        box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
-        m = s.particles.mass[0]
-        s.particles.position[0, 2] = R - m * 9.81 / contact.normal_stiffness
-        s.particles.angular_momentum[0, 1] = s.particles.inertia[0, 0] * v0 / R
-        s.reference_position[:] = s.particles.position
-        s.compute_forces()
+        s = _sphere_on_floor(ContactModel(friction=0.5, rolling_friction=0.3, wall_rolling_friction=mu_rw), v0,
+                             rolling=True)
         s.step(int(t / s.dt))
         ends.append(by_id(s, "velocity")[0, 0])
     assert ends[0] == pytest.approx(v0 - 5 / 7 * 0.05 * 9.81 * t, rel=0.02)
