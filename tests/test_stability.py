@@ -116,7 +116,7 @@ def test_a_step_grown_far_costlier_than_the_recent_ones_is_warned_once():
 def test_a_suspended_run_is_not_a_runaway(monkeypatch):
     """The run's wall clock jumps by an hour between any two readings (the process stopped with SIGSTOP,
     or the machine asleep): the runaway watch is given each chunk's CPU time, which did not jump, so no step looks
-    costlier (the first session of issue 18's ramps, paused for benchmarks, warned "a step costs 451 x
+    costlier (issue 18's first ramps, paused for benchmarks, warned "a step costs 451 x
     the run's recent typical step")."""
     import types
     import fvdem

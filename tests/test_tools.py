@@ -1,6 +1,6 @@
 """Every tool in tools/ runs from a fresh clone (issue 33): it prepares what it needs (the settled beds,
 tools/_beds.py) or refuses in one line before it measures, and has a quick mode that this suite, or
-`make smoke`, runs. FVDEM_BEDS_DIR points the tools at an empty folder: no runs/ of an earlier session."""
+`make smoke`, runs. FVDEM_BEDS_DIR points the tools at an empty folder: no runs/ left by earlier work."""
 import json
 import os
 import re
