@@ -1,2 +1,2 @@
 """fvdem's version (a leaf: what made a run names it, and the package metadata reads it)."""
-__version__ = "0.2.0"
+__version__ = "0.3.0"
