@@ -10,7 +10,7 @@
 # code under a running campaign: the workers import it afresh whenever they restart):
 #   git clone <repo> ~/fvdem-code && cd ~/fvdem-code        # once; later: git -C ~/fvdem-code pull
 #   setsid nohup studies/campaign.sh --until 07:05 > ~/fvdem-runs/campaign.log 2>&1 < /dev/null &
-# (--until: the machine's session end less the half hour an archive takes; the running runs checkpoint then and
+# (--until: the time the machine is yours until, less the half hour an archive takes; the running runs checkpoint then and
 # the studies exit). Where each stands, from anywhere:
 #   .venv/bin/fvdem study ~/fvdem-runs/screening_ar1 --status
 # and before the machine goes, archive what ended into the repository (from the work tree):

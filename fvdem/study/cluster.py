@@ -73,7 +73,7 @@ def check_cluster(cluster: dict, problems) -> None:
                 _problem(problems, f"cluster.{key}", value, what)
     if kind != "local" and "memory" not in cluster:
         problems.append(f"cluster.memory: missing; a {kind} job needs the memory it books, e.g. memory = \"4GB\" "
-                        "(one run of the paper's bed needs about 1 GB: README, \"What a run costs\")")
+                        "(one run of the paper's bed needs about 1 GB: docs/studies.md, \"What a run costs\")")
 
 
 def walltime_seconds(text: str) -> int | None:

@@ -267,7 +267,7 @@ CLOSE = 0.10  # relative differences below this need replicas to be told from ch
 SPREAD = 2.0  # with many replicas, an order is told where the means differ by more than this many standard errors
 # with few, by more than Student's t at the same one-sided level (the normal distribution's at 2: 97.7 %) for the
 # Welch-Satterthwaite degrees of freedom of the difference (``_critical``): 4.53 with two replicas a side (df 2),
-# 2.87 with three (df 4), 2.15 with ten (df 18); a replica's spread is itself a guess (since the thirty-first session)
+# 2.87 with three (df 4), 2.15 with ten (df 18); a replica's spread is itself a guess
 TOLD = 0.977249868051821  # Phi(SPREAD)
 
 

@@ -103,7 +103,7 @@ REPLICA_RANK = 10**10
 BED_RANK = 10**12
 
 # a run in progress (a checkpoint, not at its end) before every run not started, the nearest its end first:
-# a campaign stopped every session finishes what it began instead of beginning more (a machine handed back
+# a campaign stopped and continued finishes what it began instead of beginning more (a machine handed back
 # bare loses the runs in progress, compact results of finished ones are archived)
 IN_PROGRESS_RANK = 10**11
 
@@ -285,7 +285,7 @@ def run_study(study: Study, out, *, scheduler=None, workers=None, threads=1, log
               until: float | None = None) -> dict:
     """Run every bed and run of ``study`` on Dask; returns the study's result (see ``fvdem study``).
     SIGINT/SIGTERM (main thread) or ``request_stop(out)`` stop it with every running run checkpointed.
-    ``until`` (epoch seconds: a session's or an allocation's end) stops it so at that time, and until then a
+    ``until`` (epoch seconds: a machine's or an allocation's end) stops it so at that time, and until then a
     freed slot goes first to the runs expected to end before it (``_Queue``, ``_fitting``).
     Progress: the run folders are read every ``poll`` seconds (``_StudyProgress``). One study at a time runs
     in ``out``: a second is refused (``FolderInUse``, naming the first) before it touches anything."""
