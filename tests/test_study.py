@@ -2139,8 +2139,9 @@ def test_a_run_pauses_before_its_jobs_walltime_and_resumes_bit_for_bit(tmp_path,
     result = run_task(cut, 1, bed)
     assert result["status"] == "paused" and result["started"] is False and not Path(cut.folder).exists()
     paused_at = []
-    for _ in range(100):  # jobs of 0.1 s until the run is done: each steps at least one chunk (the deadline is
-        # checked after a chunk), so a fast machine pauses it too (0.3 s jobs ended it in two on a Zen 5 EPYC)
+    for _ in range(2000):  # jobs of 0.1 s until the run is done: each steps at least one chunk (the deadline is
+        # checked after a chunk), so a fast machine pauses it too (0.3 s jobs ended it in two on a Zen 5 EPYC); on a
+        # loaded machine a job steps one chunk or two, and the run's 400 CFD steps take a few hundred jobs
         monkeypatch.setenv("FVDEM_JOB_END", str(time.time() + 0.1))
         result = run_task(cut, 1, bed)
         if result["status"] != "paused":
