@@ -171,12 +171,9 @@ def test_paper_closures_resist_a_packed_bed_less_than_ergun():
     velocity than Ergun, and Gidaspow's closure holds it exactly at Ergun's."""
     from fvdem.analysis.bed import uniform_bed_umf
     from fvdem.coupling.bridge import HydrodynamicModel
-    sys_path = __import__("sys").path
-    import pathlib
-    sys_path.insert(0, str(pathlib.Path(__file__).parents[1] / "tools"))
-    from validate_umf import ergun_umf
+    from fvdem.correlations import ergun_umf
     axis = np.array([[0.0, 0.0, 1.0]])
-    ergun = ergun_umf(D, 1442.0, 0.425, 1.0)
+    ergun = ergun_umf(D, 1442.0, 0.425, 1.0, RHO, MU)
     paper = uniform_bed_umf(HydrodynamicModel("hoelzer-sommerfeld", "none", "none", D, D, RHO, MU), 0.425, axis, 1442.0)
     gidaspow = uniform_bed_umf(HydrodynamicModel("gidaspow", "none", "none", D, D, RHO, MU), 0.425, axis, 1442.0)
     assert gidaspow == pytest.approx(ergun, rel=1e-6)
@@ -356,3 +353,16 @@ def test_tang_isolated_limit_and_published_form():
     np.testing.assert_allclose(tang_normalised(0.0, re), 1 + re * (0.2334 * re ** -0.343 - 0.00456), rtol=1e-13)
     np.testing.assert_allclose(tang_normalised(0.0, re) / schiller_naumann(re), [1.193, 1.177, 1.001], atol=2e-3)
     assert tang_normalised(0.4, 100.0) == pytest.approx(11.8127 + 14.972, rel=2e-4)
+
+
+def test_the_umf_correlations_against_hand_values():
+    """Wen & Yu (1966) for seed 000's spheres in air: Ar = 1.027e7, Re_mf = sqrt(33.7^2 + 0.0408 Ar) - 33.7 =
+    614.5, Umf = 1.515 m/s (worked by hand); Ergun's quadratic root satisfies its own equation."""
+    from fvdem.correlations import ergun_umf, quadratic_crossing, wen_yu_umf
+    assert wen_yu_umf(D, 1442.0, RHO, MU) == pytest.approx(1.515, abs=2e-3)
+    u = quadratic_crossing(2.0, 3.0, 10.0)
+    assert 2.0 * u + 3.0 * u * u == pytest.approx(10.0) and quadratic_crossing(2.0, 0.0, 10.0) == 5.0
+    eps, phi = 0.425, 1.0  # Ergun's gradient at its Umf is the bed's buoyant weight per volume
+    umf = ergun_umf(D, 1442.0, eps, phi, RHO, MU)
+    gradient = (150 * (1 - eps) ** 2 * MU * umf / (eps ** 3 * D ** 2) + 1.75 * (1 - eps) * RHO * umf ** 2 / (eps ** 3 * D))
+    assert gradient == pytest.approx((1 - eps) * (1442.0 - RHO) * 9.81)

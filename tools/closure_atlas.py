@@ -41,6 +41,7 @@ from _beds import settled_beds, state_path  # noqa: E402
 from fvdem.analysis.bed import uniform_bed_umf  # noqa: E402
 from fvdem.analysis.suspension import richardson_zaki_exponent  # noqa: E402
 from fvdem.case import CaseError, case_from_dict, load_case  # noqa: E402
+from fvdem.correlations import ergun_umf  # noqa: E402
 from fvdem.coupling.bridge import HydrodynamicModel  # noqa: E402
 from fvdem.coupling.closures import law, law_names, sphericities, spherocylinder_shape  # noqa: E402
 
@@ -77,14 +78,6 @@ def measure_beds(path=BEDS, sample=400) -> dict:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(beds) + "\n")
     return beds
-
-
-def ergun_umf(d_p, rho_p, voidage, sphericity, rho, mu, g=9.81):
-    """Ergun (1952): the superficial velocity at which ``a U + b U^2`` equals the bed weight per volume."""
-    weight = (1 - voidage) * (rho_p - rho) * g
-    a = 150 * (1 - voidage) ** 2 * mu / (voidage ** 3 * (sphericity * d_p) ** 2)
-    b = 1.75 * (1 - voidage) * rho / (voidage ** 3 * sphericity * d_p)
-    return float((-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b))
 
 
 def bed_umf(beds: dict) -> dict:

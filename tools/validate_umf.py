@@ -55,8 +55,8 @@ from fvdem.analysis.bed import bed_packing, uniform_bed_pressure_gradient, unifo
 from fvdem.dem.particles import spherocylinder_volume
 from fvdem.case import case_from_dict
 from fvdem.coupling.closures import law_names, spherocylinder_shape, sphericities
+from fvdem.correlations import ergun_umf, quadratic_crossing, wen_yu_umf
 
-RHO, MU, G = 1.2, 1.568e-5, 9.81
 EXPERIMENT = {"sphere": 1.58, "spherocylinder": 1.7}
 
 
@@ -107,25 +107,6 @@ def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings=
         "run": {"threads": threads}}
 
 
-def wen_yu(d_p, rho_p):
-    archimedes = d_p ** 3 * RHO * (rho_p - RHO) * G / MU ** 2
-    reynolds = np.sqrt(33.7 ** 2 + 0.0408 * archimedes) - 33.7
-    return float(reynolds * MU / (RHO * d_p))
-
-
-def ergun_umf(d_p, rho_p, voidage, sphericity):
-    """Root of Ergun's pressure gradient = bed weight per volume at the packed bed's voidage."""
-    weight = (1 - voidage) * (rho_p - RHO) * G
-    a = 150 * (1 - voidage) ** 2 * MU / (voidage ** 3 * (sphericity * d_p) ** 2)
-    b = 1.75 * (1 - voidage) * RHO / (voidage ** 3 * sphericity * d_p)
-    return branch_crossing(a, b, weight)
-
-
-def branch_crossing(a, b, level):
-    """Velocity [m/s] at which Ergun's form ``a U + b U^2`` (a, b >= 0) reaches ``level``."""
-    return float(level / a if abs(b) < 1e-12 else (-a + np.sqrt(a * a + 4 * b * level)) / (2 * b))
-
-
 def plateau_of(velocity, drop, umf_experiment, touched_roof=None):
     """The mean of ``drop`` over the holds at and above 1.3 Umf,exp, less those where the bed touched
     the roof (``touched_roof``, a flag per hold; all of them when every fluidized hold did)."""
@@ -158,7 +139,7 @@ def fit_umf(velocity, drop, weight, umf_experiment, touched_roof=None):
         a, b = drop[fixed][0] / velocity[fixed][0], 0.0
     else:
         return plateau, None, (0.0, 0.0)
-    return plateau, branch_crossing(a, b, plateau), (float(a), float(b))
+    return plateau, quadratic_crossing(a, b, plateau), (float(a), float(b))
 
 
 SAMPLE = 5e-4  # s between pressure-drop samples of a hold (the ramp's time series interval)
@@ -306,13 +287,13 @@ def ramp(spec, threads=None):
     roofed = [bool(c.get("touched_roof", False)) for c in curve]
     plateau, umf, (a, b) = fit_umf(velocity, drop, weight, umf_exp, roofed)
     # the fixed-bed branch against W/A itself rather than the measured plateau
-    umf_at_weight = None if umf is None else branch_crossing(a, b, weight)
+    umf_at_weight = None if umf is None else quadratic_crossing(a, b, weight)
     # the same plateau with each hold's mean corrected for the bed's acceleration (hold_statistics)
     corrected = [c.get("over_weight_acceleration_corrected") for c in curve]
     plateau_corrected = umf_at_corrected = None
     if all(v is not None for v in corrected):
         plateau_corrected = plateau_of(velocity, np.asarray(corrected) * weight, umf_exp, roofed)
-        umf_at_corrected = None if umf is None else branch_crossing(a, b, plateau_corrected)
+        umf_at_corrected = None if umf is None else quadratic_crossing(a, b, plateau_corrected)
     p = case.particles
     d_p = float(spherocylinder_shape(p.diameter, p.length or p.diameter)[0])
     phi = float(sphericities(p.diameter, p.length or p.diameter, 0.0)[0])
@@ -331,14 +312,15 @@ def ramp(spec, threads=None):
         "plateau_over_weight": plateau / weight,
         "plateau_over_weight_acceleration_corrected": None if plateau_corrected is None else plateau_corrected / weight,
         "umf_at_corrected_plateau": umf_at_corrected,
-        "umf_wen_yu": wen_yu(d_p, p.density),
+        "umf_wen_yu": wen_yu_umf(d_p, p.density, case.gas.density, case.gas.viscosity, -case.domain.gravity[2]),
         "umf_at_weight": umf_at_weight,
         "drag": case.coupling.drag,
         "packed_solids_fraction": packing["solids_fraction"],
         "packed_bed_height": packing["bed_top"],
         "axis_sin2_from_vertical": packing["sin2"],
         "umf_closure_uniform_bed": closure_umf,
-        "umf_ergun_at_packed_voidage": ergun_umf(d_p, p.density, 1.0 - packing["solids_fraction"], phi),
+        "umf_ergun_at_packed_voidage": ergun_umf(d_p, p.density, 1.0 - packing["solids_fraction"], phi,
+                                                 case.gas.density, case.gas.viscosity, -case.domain.gravity[2]),
         "bed": f"{p.count} particles in a {o['width']:g} x {o['width']:g} m column, 15 mm cells, packed height "
                f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
                "property of particles and gas)",
