@@ -35,7 +35,6 @@ import numpy as np
 from scipy.optimize import brentq
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tools"))
 
 from _beds import settled_beds, state_path  # noqa: E402
 from fvdem.analysis.bed import uniform_bed_umf  # noqa: E402

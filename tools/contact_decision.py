@@ -5,8 +5,10 @@ and steps, per shape at 2.0 Umf, from the committed archives of the paper's stud
 
     python tools/contact_decision.py --archives docs/data/mema2020 docs/data/contact_paper --json
 
-Each archive's report is rebuilt in a scratch copy first (its table with the entropy columns); the last line is
-one JSON object: per shape, each measure's means at both settings, their runs and order, and the verdict."""
+Each archive's report is rebuilt in a scratch copy first (its table with the entropy columns); ``--quick`` reads
+the archives' committed tables as they are. Without ``--archives``, the committed archives of both studies that
+exist. The last line is one JSON object: per shape, each measure's means at both settings, their runs and order,
+and the verdict."""
 from __future__ import annotations
 
 import argparse
@@ -18,9 +20,15 @@ from pathlib import Path
 from fvdem.study import report
 from fvdem.study.mema2020_readings import contact_settings
 
+ROOT = Path(__file__).resolve().parents[1]
+ARCHIVES = (ROOT / "docs" / "data" / "mema2020", ROOT / "docs" / "data" / "contact_paper")
 
-def table_rows(archive: Path) -> list:
-    """The table rows of an archive (its report rebuilt in a scratch copy), the runs it plans."""
+
+def table_rows(archive: Path, rebuild: bool = True) -> list:
+    """The table rows of an archive (its report rebuilt in a scratch copy, else its committed table), the runs it
+    plans."""
+    if not rebuild:
+        return [r for r in json.loads((archive / "table.json").read_text()) if r["status"] != "not planned"]
     with tempfile.TemporaryDirectory() as scratch:
         copy = Path(scratch) / archive.name
         shutil.copytree(archive, copy)
@@ -31,15 +39,18 @@ def table_rows(archive: Path) -> list:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--archives", nargs="+", type=Path, required=True,
-                        help="study archives (fvdem study DIR --archive) holding both settings' runs")
+    parser.add_argument("--archives", nargs="+", type=Path,
+                        help="study archives (fvdem study DIR --archive) holding both settings' runs (default: the "
+                             "committed docs/data/mema2020 and docs/data/contact_paper, those that exist)")
+    parser.add_argument("--quick", action="store_true", help="read the archives' committed tables, no rebuild")
     parser.add_argument("--velocity", type=float, default=2.0, help="U/Umf of the comparison (default 2.0)")
     parser.add_argument("--json", action="store_true", help="print only the JSON object")
     args = parser.parse_args(argv)
-    missing = [str(a) for a in args.archives if not (a / "study.json").exists()]
+    archives = args.archives or [a for a in ARCHIVES if (a / "study.json").exists()]
+    missing = [str(a) for a in archives if not (a / "study.json").exists()]
     if missing:
         parser.exit(2, f"--archives: {', '.join(missing)}: not a study archive (no study.json)\n")
-    rows = [r for archive in args.archives for r in table_rows(archive)]
+    rows = [r for archive in archives for r in table_rows(archive, rebuild=not args.quick)]
     result = contact_settings(rows, args.velocity)
     if not args.json:
         for shape, entry in result["shapes"].items():

@@ -24,7 +24,6 @@ import traceback
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 from fvdem.case import CaseError, case_from_dict  # noqa: E402
 

@@ -38,8 +38,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
 from _beds import settled_beds, settled_dem  # noqa: E402
 
 # Row i's pairs, as fvdem/dem/forces.py (_sphere_row) and fvdem/dem/contact_law.py (contact_force) compute
