@@ -151,7 +151,7 @@ def study_schema() -> dict:
                 "name": {"type": "string"}, "description": {"type": "string"},
                 "duration": {**seconds, "description": "simulated seconds of every run (time.end)"},
                 "replicas": replicas, "settings": settings,
-                "report": {"enum": sorted(REPORTS), "default": "mema2020",
+                "report": {"enum": sorted(REPORTS), "default": "table",
                            "description": "the study's table, figures and findings (fvdem laws report)"},
                 "beds": {"type": "object", "additionalProperties": bed,
                          "description": "settled beds, each prepared once before the runs that start from it"},

@@ -61,6 +61,7 @@ LAYERS = [
     {"model", "scenes", "monitors"},
     {"simulation"},
     {"study", "warmup"},
+    {"reports"},  # published studies' reports (fvdem.reports.mema2020), registered with the study engine by name
     {"json_schema"},
     {"cli"},
     {"__main__", "__init__"},

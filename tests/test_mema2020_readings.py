@@ -1,4 +1,4 @@
-"""The second set of rules of seed 000's findings (issue 66; fvdem.study.mema2020_readings), fixed before the
+"""The second set of rules of seed 000's findings (issue 66; fvdem.reports.mema2020.readings), fixed before the
 study's stage 3: each decides on rows of known numbers as its rule says, and the first set's verdicts on the
 committed stage-2 archive stay what they were."""
 import json
@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fvdem.study import mema2020_readings as readings
-from fvdem.study.mema2020 import check_findings, entropy_columns
+from fvdem.reports.mema2020 import readings
+from fvdem.reports.mema2020.report import check_findings, entropy_columns
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -71,6 +71,8 @@ def test_the_larger_fall_counts_an_unmixed_run_at_its_end_as_a_bound():
     stalled = _rows("ar4_mp", 1.6, t95=[None, None, None]) + _rows("ar4_mp", 2.0, t95=[4.7, 4.8, 4.9])
     finding = readings.larger_drop(ar1 + stalled, "")  # AR-4's fall > 20 - 4.8 = 15.2 s, a bound above AR-1's
     assert finding["verdict"] == "does not hold" and finding["values"]["ar4_mp"]["lower bound"]
+    unknown = _rows("ar4_mp", 1.6, t95=[None], ends=[None]) + _rows("ar4_mp", 2.0, t95=[4.7, 4.8, 4.9])
+    assert readings.larger_drop(ar1 + unknown, "")["verdict"] == "open"  # unmixed at an unknown end: no bound
     short = _rows("ar4_mp", 1.6, t95=[None] * 3, ends=[8.0] * 3) + _rows("ar4_mp", 2.0, t95=[4.7, 4.8, 4.9])
     assert readings.larger_drop(ar1 + short, "")["verdict"] == "open"  # > 3.2 s only: a bound that decides nothing
 

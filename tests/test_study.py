@@ -184,7 +184,7 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     families ran, with every replica of each; a family without its partner draws no pair."""
     import fvdem.analysis.plots as plots
     from fvdem.study import report
-    import fvdem.study.mema2020 as mema
+    import fvdem.reports.mema2020.report as mema
     drawn, plot_mixing, plot_void_fractions = {}, plots.plot_mixing, mema.plot_void_fractions
     monkeypatch.setattr(plots, "plot_mixing", lambda folders, path: drawn.setdefault(
         Path(path).name, [Path(f).name for f in folders]) and plot_mixing(folders, path))
@@ -208,7 +208,7 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
         (folder / "case.toml").write_text(f'name = "{family}"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = {ratio}\n')
         runs.append({"name": folder.name, "family": family, "status": "stopped" if on_its_way else "finished",
                      "folder": str(folder), "t95": None if on_its_way else 1.0, "point": {"gas.u_over_umf": ratio}})
-    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": runs}))
     names = sorted(Path(p).name for p in report(tmp_path))
     assert "fig3_mixing_2.png" in names and "fig7_void_fraction_2.png" in names and "fig9_mixing_2.9.png" in names
     assert not any(n.startswith(("fig3_mixing_1.6", "fig3_mixing_2.9", "fig9_mixing_2.png")) for n in names)
@@ -229,7 +229,7 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
         (folder / "case.toml").write_text(f'name = "{family}"\n[gas]\nenabled = true\numf = 1.58\nu_over_umf = 2.9\n')
         runs.append({"name": folder.name, "family": family, "status": "finished", "folder": str(folder), "t95": 1.0,
                      "point": {"gas.u_over_umf": 2.9}})
-    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": runs}))
     drawn.clear()
     names = sorted(Path(p).name for p in report(tmp_path))
     assert drawn["fig3_mixing_2.9.png"] == ["ar1_2.9", "ar4_mp_tall_2.9"]
@@ -241,7 +241,7 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     assert named["ar4_mp_tall_2.9"] == "ar4_mp" and named["ar4_mp_2.0"] == "ar4_mp" and named["ar4_mp_2.9"] == aside
     assert named["aside"] == {aside: "ar4_mp"}
     runs[-1] = {**runs[-1], "status": "stopped", "t95": None}
-    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": runs}))
     drawn.clear()
     (tmp_path / "runs" / "ar4_mp_tall_2.9" / "timeseries.csv").write_text("time,mixing_entropy\n0.0,0.1\n0.5,0.6\n")
     report(tmp_path)
@@ -252,7 +252,7 @@ def test_the_share_of_the_window_with_the_bed_top_at_the_outlet():
     """``bed_at_roof``: over the window (1 s after a 1 s ramp, for 3 s), the share of samples whose bed_top lies
     within 1 cm of the outlet."""
     import numpy as np
-    from fvdem.study.mema2020 import _at_roof
+    from fvdem.reports.mema2020.report import _at_roof
     time = np.round(np.arange(0, 8.001, 0.01), 2)
     top = np.where((time >= 2.0) & (time < 3.5), 1.05, 0.6)  # at the roof for the first half of 2-5 s
     series = {"time": time, "bed_top": top}
@@ -270,7 +270,7 @@ def test_the_share_of_the_particles_pinned_at_the_outlet_at_the_end(tmp_path):
     import numpy as np
     from fvdem.analysis.plots import COLOUR_LAYERS
     from fvdem.scenes.observables import colour_layer_record
-    from fvdem.study.mema2020 import _reaches_roof, _roof_share
+    from fvdem.reports.mema2020.report import _reaches_roof, _roof_share
     time = np.round(np.arange(0, 6.001, 0.5), 2)
     series = {"time": time, "bed_top": np.where(time >= 1.5, 1.05, 0.5)}
     record = {"z_lower": 0.0, "layer_height": 0.03, "times": [0.0, 6.0],
@@ -292,7 +292,7 @@ def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():
     counts: the share of the filled height); ``_dense_bed_expansion``: its mean over the window at the snapshots
     over its first, unmoved by the few particles thrown far above the bed that set the 99 % top."""
     import numpy as np
-    from fvdem.study.mema2020 import _centre_quantile, _dense_bed_expansion
+    from fvdem.reports.mema2020.report import _centre_quantile, _dense_bed_expansion
     assert _centre_quantile([100] * 10, 0.0, 0.03) == pytest.approx(0.9 * 0.3)  # uniform over 0-0.3 m
     assert _centre_quantile([100] * 10, 0.1, 0.03, share=0.5) == pytest.approx(0.1 + 0.15)
     assert _centre_quantile([0, 50, 50], 0.0, 0.1, share=0.5) == pytest.approx(0.2)  # the first layer holds none
@@ -316,7 +316,7 @@ def test_how_many_replicas_would_tell_comes_with_their_core_hours():
     costs: equal counts, ``sqrt(sum var / n)``; a series 4 times the cost gets half the replicas); ``_to_tell``:
     them, with the core-hours of those to add at a replica's CPU seconds there so far (``_replica_cost``: the mean
     of the runs at their end, of one column alone where asked)."""
-    from fvdem.study.mema2020 import _critical, _replica_cost, _replicas_to_tell, _satterthwaite, _to_tell
+    from fvdem.reports.mema2020.report import _critical, _replica_cost, _replicas_to_tell, _satterthwaite, _to_tell
 
     def margin_squared(n, m):  # t^2 (1 / n + 1 / m) at the Welch-Satterthwaite degrees of freedom, unit variances
         return _critical(_satterthwaite([1 / n, 1 / m], [n - 1, m - 1])) ** 2 * (1 / n + 1 / m)
@@ -363,7 +363,7 @@ def test_the_papers_fig7_pools_each_familys_replicas_panel_by_panel(tmp_path, mo
     """Fig. 7 as the paper draws it: a panel per velocity, one histogram per family, its replicas pooled by
     their cells, each replica's binarity in the label; a velocity without snapshots says so."""
     import fvdem.analysis.plots as plots
-    from fvdem.study.mema2020 import VOID_FRACTION, plot_void_fraction_panels
+    from fvdem.reports.mema2020.report import VOID_FRACTION, plot_void_fraction_panels
     edges = [0.05 * k for k in range(21)]
     runs = []
     for name, family, cells, peak, binarity in (("a1", "ar1", 100, 9, 0.4), ("a2", "ar1", 300, 10, 0.5),
@@ -412,7 +412,7 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     (folder / "timeseries.csv").write_text(
         "time,mixing_entropy,pressure_drop_over_weight,bed_top,gas_max_speed,max_overlap_over_diameter\n"
         + "".join(f"{a},{b},{c},{d},{e},{f}\n" for a, b, c, d, e, f in zip(t, entropy, drop, top, fastest, overlap)))
-    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "runs": [
+    (tmp_path / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": [
         {"name": "ar1_2.9", "family": "ar1", "status": "stopped", "folder": str(folder), "t95": None,
          "point": {"gas.u_over_umf": 2.9}}]}))
     report(tmp_path)
@@ -433,7 +433,7 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     assert row["overlap_p99"] == pytest.approx(np.percentile(overlap, 99)) and row["overlap_p99"] < 0.3
     # runs of different lengths (8 s; ended at 5.5 s, 2 s past t95) over one window: a bed rising slowly
     # stands as high in both (over their second halves it would not: 6 s against 4.1 s)
-    from fvdem.study.mema2020 import _bed_surface
+    from fvdem.reports.mema2020.report import _bed_surface
     runs = [{"time": np.linspace(0.0, end, int(end * 100) + 1)} for end in (8.0, 5.5)]
     for series in runs:
         series["bed_top"] = 0.3 + 0.01 * series["time"]
@@ -442,7 +442,7 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
 
 
 def test_the_papers_findings_are_checked_from_the_t95_table():
-    from fvdem.study import check_findings
+    from fvdem.reports.mema2020 import check_findings
 
     def row(family, ratio, t95):
         return {"family": family, "status": "finished", "gas.u_over_umf": ratio, "t95": t95}
@@ -529,7 +529,7 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     # being unknown): five of each (df 8, t 2.37: 5.61 x 9.857 x 2 / 5 = 22.1 <= 22.8), not the two-sided order's
     # 2.78 (12 of each; the planner said 11 and 10 before the plans became one-sided, and 4 and 4 with 2 for t)
     assert "about 5 of ar4_mp and 5 of ar4_mp_drag in all would tell (now 2 and 2)" in open_["why"]
-    from fvdem.study.mema2020 import _alike, _replicas_to_tell
+    from fvdem.reports.mema2020.report import _alike, _replicas_to_tell
     var = 4.44 ** 2 / 2
     assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0, bounded=True) == [5, 5]
     assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0) == [12, 12]  # two-sided: the order
@@ -588,7 +588,7 @@ def test_replicas_all_counted_at_one_end_have_an_unknown_spread_not_none():
     """Two AR-4 MP replicas both unmixed by 20 s (counted at 20, 20: sample variance 0) against one drag-only run
     mixed at 19.8 s: the error of the difference is not 0 (which would tell a 1 % gap); each side takes the
     other's variance, and where neither has one the 10 % rule decides."""
-    from fvdem.study.mema2020 import _within_spread
+    from fvdem.reports.mema2020.report import _within_spread
     assert _within_spread([20.0, 20.0], [19.8]) == "means 20 (20, 20) against 19.8 (19.8), within 10 % and no " \
         "spread known"
     assert _within_spread([20.0, 20.0], [15.0]) is None  # 25 % apart: told
@@ -605,7 +605,7 @@ def test_values_within_their_spread_are_alike_only_where_the_spread_rules_out_a_
     degrees of freedom (6.61), within 10 % of 4.29; 4.0 / 4.7 against 4.0 / 4.6 are within their spread but not
     alike; one run each tells nothing of likeness, and one run takes the other family's variance (and its degrees
     of freedom)."""
-    from fvdem.study.mema2020 import _alike
+    from fvdem.reports.mema2020.report import _alike
     assert _alike([4.21, 4.25], [4.30, 4.28]).startswith("alike: the means 4.23 and 4.29 differ by 0.06, with 6.61 "
                                                          "standard errors at most 0.208")
     assert _alike([4.0, 4.7], [4.0, 4.6]) is None
@@ -624,8 +624,8 @@ def test_the_bed_expansion_figure_draws_what_the_finding_counts(tmp_path, monkey
     """``bed_expansion.png`` (the report's, from the table's rows) shows the runs the expansion finding counts:
     a "<family>_expansion" family's runs as their family's, a taller column's in place of the paper's column's
     at its velocity, a bed whose top stood at the outlet apart (a cross), runs still on their way left out."""
-    import fvdem.study.mema2020 as mema
-    from fvdem.study import check_findings
+    import fvdem.reports.mema2020.report as mema
+    from fvdem.reports.mema2020 import check_findings
 
     def row(family, ratio, height, status="finished", **more):
         return {"family": family, "status": status, "gas.u_over_umf": ratio, "t95": 3.0, "simulated_seconds": 8.0,
@@ -658,8 +658,8 @@ def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, 
     crossing, the same as a whole run's) counts as <name>'s in the t95 findings and Fig. 4, and "<name>_tall_t95"
     as a taller column's; neither in the bed expansion (a window it may not reach) nor in the void fractions
     (over the second half of a run that ended at t95)."""
-    from fvdem.study import check_findings
-    from fvdem.study.mema2020 import _figures
+    from fvdem.reports.mema2020 import check_findings
+    from fvdem.reports.mema2020.report import _figures
 
     def row(family, v, t95, height, binarity):
         return {"family": family, "status": "finished", "gas.u_over_umf": v, "t95": t95, "simulated_seconds": 8.0,
@@ -691,7 +691,7 @@ def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, 
         {k: f for k, f in counted.items() if k not in (expansion, binarity)}
     # Fig. 4 draws them as their family's, Fig. 7 leaves them out
     import fvdem.analysis.plots as plots
-    import fvdem.study.mema2020 as mema
+    import fvdem.reports.mema2020.report as mema
     drawn = {}
     monkeypatch.setattr(plots, "plot_t95", lambda folders, path, names=None, **kw: drawn.update(t95=sorted(names)))
     monkeypatch.setattr(mema, "plot_void_fraction_panels", lambda panels, path: drawn.update(
@@ -709,7 +709,7 @@ def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, 
 
 
 def test_the_sharp_drop_the_shrinking_differences_mp_against_sp_and_the_bed_expansion_findings():
-    from fvdem.study import check_findings
+    from fvdem.reports.mema2020 import check_findings
 
     def row(family, ratio, t95, end=8.0, height=None):  # height: the bed's expansion
         return {"family": family, "status": "finished", "gas.u_over_umf": ratio, "t95": t95,
@@ -1088,7 +1088,7 @@ def test_the_plan_of_the_open_findings_adds_the_replicas_they_ask_less_those_cou
     AR-4 MP and 14 of AR-1 in all. The study has two of AR-1 and three of AR-4 MP there (the third not started):
     the tables raise them to 2 + 12 = 14 and 3 + (12 - 2 - 1) = 12, and appended to the study file they give
     exactly those runs, the earlier ones under their names."""
-    from fvdem.study.mema2020 import _replicas_to_tell, check_findings, plan_points
+    from fvdem.reports.mema2020.report import _replicas_to_tell, check_findings, plan_points
 
     def row(family, t95, replica, status="finished"):
         return {"family": family, "status": status, "gas.u_over_umf": 2.0, "t95": t95, "replica": replica,
@@ -1126,7 +1126,7 @@ def test_a_plans_replicas_are_of_the_cheapest_family_that_counts_in_the_column_t
     expansion's of ar1_expansion; a run cut short after the expansion window counts for no t95 finding, nor one
     that ends when it mixes for the expansion; and the runs on their way are counted in the column that
     stands."""
-    from fvdem.study.mema2020 import EXPANSION_KIND, T95, _counted_as, _on_the_way, _plan_family
+    from fvdem.reports.mema2020.report import EXPANSION_KIND, T95, _counted_as, _on_the_way, _plan_family
     present = {("ar1", 2.0): 2, ("ar1_t95", 2.0): 8, ("ar1", 2.9): 1, ("ar1_tall", 2.9): 3,
                ("ar1_tall_t95", 2.9): 6, ("ar1", 1.6): 2, ("ar1_expansion", 1.7): 11, ("ar1", 1.7): 2}
     assert [_plan_family("ar1", v, T95, present) for v in (2.0, 2.9, 1.6, 1.7)] == [
@@ -1423,7 +1423,7 @@ def test_the_terminal_rules_wait_for_every_velocity_from_2_3_umf_the_study_plans
     """The terminal t95 and "little change above 2.3 Umf" are of every velocity from 2.3 Umf on: while one the
     study plans has no result (not started, or on its way unmixed), both wait for it; a run that ended unmixed
     is a result (the rules then say it is too short)."""
-    from fvdem.study import check_findings
+    from fvdem.reports.mema2020 import check_findings
 
     def row(ratio, t95, status="finished"):
         return {"family": "ar4_mp", "status": status, "gas.u_over_umf": ratio, "t95": t95}
@@ -1445,7 +1445,7 @@ def test_the_terminal_rules_wait_for_every_velocity_from_2_3_umf_the_study_plans
 
 
 def test_the_void_fraction_and_paper_settings_findings_and_little_change_above_2_3():
-    from fvdem.study import check_findings
+    from fvdem.reports.mema2020 import check_findings
 
     def row(family, ratio, t95, binarity=None, drop=1.0):
         return {"family": family, "status": "finished", "gas.u_over_umf": ratio, "t95": t95,
@@ -1612,13 +1612,13 @@ def test_an_archive_drops_a_run_the_study_no_longer_lists_where_it_holds_nothing
             "point": {"gas.u_over_umf": 2.0}, "replica": 1}
     ghost = {"name": "ar1_u_over_umf2_r2", "family": "ar1", "status": "pending", "folder": str(out / "runs" / "r2"),
              "t95": None, "point": {"gas.u_over_umf": 2.0}, "replica": 2}
-    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [done, ghost]}))
+    (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": [done, ghost]}))
     archive(out, dest)
     assert [r["name"] for r in json.loads((dest / "study.json").read_text())["runs"]] == [done["name"], ghost["name"]]
-    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [done]}))  # the study file dropped the replica
+    (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": [done]}))  # the study file dropped the replica
     archive(out, dest)
     assert [r["name"] for r in json.loads((dest / "study.json").read_text())["runs"]] == [done["name"]]
-    (out / "study.json").write_text(json.dumps({"study": "t", "runs": []}))  # nor the run: the archive keeps it
+    (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": []}))  # nor the run: the archive keeps it
     archive(out, dest)
     assert [r["name"] for r in json.loads((dest / "study.json").read_text())["runs"]] == [done["name"]]
 
@@ -1692,7 +1692,7 @@ def test_an_archive_of_compact_results_rebuilds_the_report_and_findings_without_
         _fake_run(folder, family, ratio, rate, voidage)
         runs.append({"name": folder.name, "family": family, "status": "finished", "folder": str(folder),
                      "t95": None, "point": {"gas.u_over_umf": ratio}, "replica": 1})
-    (out / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+    (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": runs}))
     (out / "study.toml").write_text('name = "t"\n')
     written = report(out)
     table, findings = (json.loads((out / name).read_text()) for name in ("table.json", "findings.json"))
@@ -1836,7 +1836,7 @@ def test_the_t95_chart_shows_runs_that_mixed_or_ended_not_runs_on_their_way(tmp_
                  "point": {"gas.u_over_umf": ratio}, **entries.get(name, {})}
                 for name, folder, ratio, t95, status in (("mixed", mixed, 2.0, 2.5, "finished"),
                                                          ("slow", slow, 1.6, None, slow_status))]
-        (out / "study.json").write_text(json.dumps({"study": "t", "runs": runs}))
+        (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": runs}))
         drawn.clear()
         report(out)
         table = json.loads((out / "table.json").read_text())
@@ -2157,11 +2157,13 @@ def test_a_run_pauses_before_its_jobs_walltime_and_resumes_bit_for_bit(tmp_path,
 def test_a_study_names_its_report_and_an_unknown_report_is_refused(tmp_path):
     text = SMOKE.read_text().replace('"../cases/', f'"{ROOT / "cases"}/')
     path = tmp_path / "named.toml"
-    path.write_text('report = "table"\n' + text)
+    path.write_text(text.replace('report = "mema2020"', 'report = "table"'))
     study = load_study(path, tmp_path / "out")
     assert study.report == "table" and {r.report for r in study.runs} == {"table"}
-    assert load_study(SMOKE, tmp_path / "default").report == "mema2020"
-    path.write_text('report = "mema202"\n' + text)
+    assert load_study(SMOKE, tmp_path / "named").report == "mema2020"  # the smoke study names the paper's
+    path.write_text(text.replace('report = "mema2020"', ''))
+    assert load_study(path, tmp_path / "default").report == "table"  # the engine's default: the generic table
+    path.write_text(text.replace('report = "mema2020"', 'report = "mema202"'))
     with pytest.raises(CaseError) as refused:
         load_study(path, tmp_path / "out")
     assert "report = 'mema202': a registered report (did you mean 'mema2020'?): bed, mema2020, table" in str(refused.value)
@@ -2432,10 +2434,10 @@ def test_a_run_listed_in_progress_whose_summary_shows_its_end_is_reported_ended(
     _fake_run(folder, "ar1", 2.0, 0.5, [0.4, 0.9])
     entry = {"name": folder.name, "family": "ar1", "status": "stopped", "folder": str(folder), "replica": 1,
              "point": {"gas.u_over_umf": 2.0}, "duration": 4.0}
-    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [entry]}))
+    (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": [entry]}))
     report(out)
     assert json.loads((out / "table.json").read_text())[0]["status"] == "finished"
-    (out / "study.json").write_text(json.dumps({"study": "t", "runs": [{**entry, "duration": 8.0}]}))
+    (out / "study.json").write_text(json.dumps({"study": "t", "report": "mema2020", "runs": [{**entry, "duration": 8.0}]}))
     report(out)  # a longer duration than its summary reached: still on its way
     assert json.loads((out / "table.json").read_text())[0]["status"] == "stopped"
 

@@ -1,6 +1,6 @@
 """The contact settings, decided (issue 66, item 3): fvdem's defaults against Mema et al.'s own contact stiffness
 and steps, per shape at 2.0 Umf, from the committed archives of the paper's study (the defaults' replicas) and of
-``studies/contact_paper.toml`` (the paper's settings), by the rule ``fvdem.study.mema2020_readings.contact_settings``
+``studies/contact_paper.toml`` (the paper's settings), by the rule ``fvdem.reports.mema2020.readings.contact_settings``
 (fixed before the runs it judges).
 
     python tools/contact_decision.py --archives docs/data/mema2020 docs/data/contact_paper --json
@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 from fvdem.study import report
-from fvdem.study.mema2020_readings import contact_settings
+from fvdem.reports.mema2020.readings import contact_settings
 
 ROOT = Path(__file__).resolve().parents[1]
 ARCHIVES = (ROOT / "docs" / "data" / "mema2020", ROOT / "docs" / "data" / "contact_paper")

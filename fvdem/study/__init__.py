@@ -6,7 +6,7 @@ them start from, the axes to vary, exclusions, the duration and replicas::
     name = "smoke"
     duration = 0.04                    # simulated seconds of every run (time.end)
     replicas = 1                       # repeats, each from its own bed (insertion seed + k - 1)
-    report = "mema2020"                # its table, figures and findings (``reports``; the default)
+    report = "mema2020"                # its table, figures and findings (a registered report; "table" by default)
     [settings]                         # for every run and bed
     "output.vtk" = false
     [beds.small]                       # prepared once, before the runs that start from it
@@ -44,9 +44,10 @@ runs; ``study.json`` keeps the others' last results. ``study.json`` lists every 
 
 The package, one module per job: ``sweep`` (the study file read and checked into beds and runs),
 ``cluster`` (where the runs go: the ``[cluster]`` table and the Dask client), ``tasks`` (what runs on a
-worker), ``runner`` (the Dask runner, ``study.json``, ``map_tasks``), ``reports`` (the registry of
-reports, the table and the archive) and ``mema2020`` (seed 000's figures and findings, the default
-report). Nothing in the first four knows what a run measures.
+worker), ``runner`` (the Dask runner, ``study.json``, ``map_tasks``), ``reports`` (the table, the figures
+and the archive of the registered report), the leaves ``records``, ``registry`` and ``specs``, and the
+designed experiments (``design``, ``designed``, ``screening``). A published study's report is a package of
+its own (``fvdem.reports``: e.g. ``fvdem.reports.mema2020``), registered by name.
 """
 from .checks import read_toml
 from .cluster import (CLUSTER_KINDS, CLUSTER_TYPES, DEFAULT_STOP_BEFORE_WALLTIME, JOB_END_ENV, STOP_MARGIN_ENV,
@@ -56,7 +57,6 @@ from .reports import REPORTS, StudyReport, archive, register_report, report, rep
 from .runner import map_tasks, progress_line, request_stop, run_study, task_tag, write_index
 from .sweep import STUDY_KEYS, BedSpec, RunSpec, Study, load_study, select_runs, study_from_table
 from .tasks import STOP_FILE, StudyStopped, prepare_bed, run_task
-from .mema2020 import check_findings, void_fraction_record, void_fraction_samples  # noqa: E402  (registers it)
 
 __all__ = ["CLUSTER_KINDS", "CLUSTER_TYPES", "DEFAULT_STOP_BEFORE_WALLTIME", "JOB_END_ENV", "REPORTS", "STOP_FILE",
            "STOP_MARGIN_ENV", "STUDY_KEYS", "BedSpec", "RunSpec", "Study", "StudyReport", "StudyStopped", "archive",

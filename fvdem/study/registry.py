@@ -31,8 +31,9 @@ class StudyReport:
 
 
 REPORTS: dict[str, StudyReport] = {}
-DEFAULT_REPORT = "mema2020"
-REPORT_MODULES = ("mema2020", "mema2020_readings")  # modules of this package that register reports, imported on first use
+DEFAULT_REPORT = "table"
+# the modules that register reports, imported on first use (the engine names no report of its own but "table")
+REPORT_MODULES = ("fvdem.reports.mema2020",)
 
 
 def register_report(report: StudyReport) -> StudyReport:
@@ -45,7 +46,7 @@ def report_for(name: str | None) -> StudyReport:
     """The registered report ``name`` (the default for None); ``report_for(None)`` also fills ``REPORTS``."""
     import importlib
     for module in REPORT_MODULES:  # each once (imported modules are cached)
-        importlib.import_module(f"{__package__}.{module}")
+        importlib.import_module(module)
     return REPORTS[name or DEFAULT_REPORT]
 
 

@@ -7,8 +7,8 @@ run's summary ``study.json`` keeps (``run_values``: seed 000's report keeps t95)
 run's progress line (``headline``), what a run still in progress holds (``live``: from its time series),
 its table columns, its figures and its findings (``findings.json``), and what an archive keeps beyond the
 generic (time-series columns, summary keys, files). A study file names its report (``report = "..."``,
-``fvdem schema --registered`` lists them); ``"table"`` is the generic one, ``"mema2020"`` (seed 000's
-mixing figures and findings, ``fvdem.study.mema2020``) the default. Adding one: docs/ARCHITECTURE.md,
+``fvdem schema --registered`` lists them); ``"table"`` is the generic one and the default; published studies'
+reports are packages of their own (``fvdem.reports``, e.g. ``"mema2020"``). Adding one: docs/ARCHITECTURE.md,
 "Add a study figure or finding".
 """
 from __future__ import annotations

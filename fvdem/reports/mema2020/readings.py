@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from .mema2020 import (ENDED, ENTROPY_TIMES, LATER_READINGS, _alike, _by_velocity, _compare, _critical,
+from .report import (ENDED, ENTROPY_TIMES, LATER_READINGS, _alike, _by_velocity, _compare, _critical,
                        _expansion_runs, _margin, _margin_words, _sample_variance, _satterthwaite, _t95_runs,
                        _tall_columns, _told_rows)
 
@@ -213,6 +213,9 @@ def larger_drop(rows, paper: str) -> dict:
             return _verdict(claim, {}, [f"{family}: needs mixed runs at 2.0 Umf and runs at 1.6 Umf"], values, rule,
                             paper)
         low = [x if x is not None else e for x, e in zip(t[1.6], ends[1.6])]
+        if None in low:  # a run not mixed whose end is not known: no bound either
+            return _verdict(claim, {}, [f"{family}: a run at 1.6 Umf neither mixed nor at a known end"], values,
+                            rule, paper)
         bounded = None in t[1.6]
         falls[family] = (_mean(low) - _mean(t[2.0]), bounded)
         groups += [low, t[2.0]]

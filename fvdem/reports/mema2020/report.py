@@ -11,10 +11,10 @@ import re
 from pathlib import Path
 from dataclasses import replace
 
-from ..analysis.plots import COLOUR_LAYERS
-from ..scenes.observables import colour_layer_record
-from .records import ENDED, FAILED, IN_PROGRESS, folder_case
-from .registry import StudyReport, register_report
+from ...analysis.plots import COLOUR_LAYERS
+from ...scenes.observables import colour_layer_record
+from ...study.records import ENDED, FAILED, IN_PROGRESS, folder_case
+from ...study.registry import StudyReport, register_report
 
 
 # s: the window of the bed's height and of its channels, the same in every run whatever its length (8 s,
@@ -188,7 +188,7 @@ def void_fraction_record(folder, below=0.3) -> dict | None:
     20-bin density histogram on [0, 1], their binarity (``void_fraction_binarity``) and count; from the
     snapshots, else from an archived run's ``void_fraction.json``; None without either."""
     import numpy as np
-    from ..analysis.mixing import void_fraction_binarity
+    from ...analysis.mixing import void_fraction_binarity
     values = void_fraction_samples(folder, below)
     if values.size:
         counts, edges = np.histogram(values, bins=20, range=(0.0, 1.0), density=True)
@@ -203,7 +203,7 @@ def plot_void_fractions(runs, path, below=0.3):
     """Histograms of the cell void fraction below ``below`` [m] over the second half of each run's gas
     snapshots, on one chart, with each run's binarity (``void_fraction_binarity``; Mema et al. (2020) Fig. 7)."""
     import numpy as np
-    from ..analysis.plots import _pyplot, _save
+    from ...analysis.plots import _pyplot, _save
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.8))
     for r in runs:
@@ -229,7 +229,7 @@ def plot_void_fraction_panels(panels: dict, path, below=0.3):
     fraction below ``below`` [m] over the second half of its runs' gas snapshots, the replicas pooled (each run's
     density weighted by its cells), labelled with each replica's binarity (``void_fraction_binarity``)."""
     import numpy as np
-    from ..analysis.plots import _pyplot, _save
+    from ...analysis.plots import _pyplot, _save
     plt = _pyplot()
     columns = min(2, len(panels))
     rows = (len(panels) + columns - 1) // columns
@@ -969,7 +969,7 @@ def plot_expansion(measured: list, roofed: list, path) -> Path:
     outlet is a cross."""
     import numpy as np
 
-    from ..analysis.plots import _pyplot, _save
+    from ...analysis.plots import _pyplot, _save
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
     cut_short = left_out = False
@@ -1323,7 +1323,7 @@ def _live(series) -> dict:
     """A run in progress from its time series: t95 (None if not yet mixed), and the bed pressure drop over
     W/A and its fluctuation over the second half of what it holds."""
     import numpy as np
-    from ..analysis.plots import series_t95
+    from ...analysis.plots import series_t95
     times = series["time"]
     out = {"t95": series_t95(series)}
     if "pressure_drop_over_weight" in series and len(times) > 1:
@@ -1358,7 +1358,7 @@ def _figures(out: Path, runs: list) -> list:
     their void fractions below 0.3 m (Fig. 7), and AR-4 MP drag only against drag + lift + torque (Fig. 9). The
     pairs take a taller column's runs that mixed or ended for their family's, as the findings do
     (``_tall_columns``)."""
-    from ..analysis.plots import plot_mixing, plot_mixing_by_velocity, plot_t95
+    from ...analysis.plots import plot_mixing, plot_mixing_by_velocity, plot_t95
     paths = []
     levels = [r["point"]["gas.u_over_umf"] for r in runs if "gas.u_over_umf" in r.get("point", {})] or None
     for family in sorted({r["family"] for r in runs}):
@@ -1486,8 +1486,8 @@ def channel_record(folder, window: tuple | None = None) -> dict | None:
     import meshio
     import numpy as np
 
-    from ..analysis.channels import gas_shares, rod_alignment
-    from ..io.vtk import read_pvd
+    from ...analysis.channels import gas_shares, rod_alignment
+    from ...io.vtk import read_pvd
     folder = Path(folder)
     wanted = (lambda t: True) if window is None else (lambda t: window[0] - 1e-9 <= t <= window[1] + 1e-9)
     snapshots = [(t, name) for t, name in read_pvd(folder / "gas.pvd") if wanted(t)]
