@@ -39,13 +39,7 @@ SEPARATORS = {"|", "||", "&&", ";", "&"}
 
 # Command lines known not to parse, in files rewritten by other work: file -> {a substring of the command: why}.
 # Each still has to fail (so the entry is dropped once fixed): the file's test is then reported as xfail.
-KNOWN_BROKEN = {
-    "docs/validation.md": {
-        "--set gas.u_over_umf=2.9 contact.normal_stiffness=800": "several KEY=VALUE after one --set (fvdem refuses "
-                                                                 "them: one --set per key); the page is rewritten "
-                                                                 "as a current-results page separately (issue 67)",
-    },
-}
+KNOWN_BROKEN: dict[str, dict[str, str]] = {}
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,6 @@
-"""Gas channels along a bed's walls and corners, and how its rods lie there (docs/validation.md, "Stage 2 so
-far": AR-4 MP at 1.6 x its own Umf sends the gas up the column's corners).
+"""Gas channels along a bed's walls and corners, and how its rods lie there (docs/validation.md, "Why AR-4 MP
+stalls near its Umf: gas channels along the corners": AR-4 MP at 1.6 x its own Umf sends the gas up the column's
+corners).
 
 The column's gas cells are split into three classes of vertical columns: the 4 **corner** columns, the
 **wall** columns along the side walls (corners excluded) and the columns **inside**. Over the layers whose
