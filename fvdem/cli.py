@@ -301,8 +301,8 @@ def cmd_info(args) -> int:
 
 
 def registered(kind: str | None = None) -> dict:
-    """What the registries hold: drag, lift and torque laws, voidage methods, scenes, DEM backends and study
-    reports, each name with what it is, where it applies and its reference."""
+    """What the registries hold: drag, lift and torque laws, voidage methods, stochastic forces, scenes, DEM
+    backends and study reports, each name with what it is, where it applies and its reference."""
     from .coupling.closures import LAWS
     from .coupling.voidage import METHODS
     from .scenes import SCENES
@@ -310,6 +310,10 @@ def registered(kind: str | None = None) -> dict:
                         "validity": l.validity, "reference": l.reference} for name, l in laws.items()}
              for k, laws in LAWS.items()}
     table["voidage"] = {name: {"summary": m.summary, "reference": m.reference} for name, m in METHODS.items()}
+    from .coupling.stochastic import MODELS, NO_STOCHASTIC_FORCE
+    table["stochastic_force"] = {name: {"summary": NO_STOCHASTIC_FORCE} if m is None else
+                                 {"summary": m.summary, "validity": m.validity, "reference": m.reference}
+                                 for name, m in MODELS.items()}
     table["scenes"] = {name: {"summary": s.summary} for name, s in SCENES.items()}
     from .dem.backends import BACKENDS
     table["dem_backend"] = {name: {"summary": description} for name, (_, description) in BACKENDS.items()}
@@ -529,8 +533,10 @@ def make_parser() -> argparse.ArgumentParser:
                         help="a JSON Schema of case files or study files, for an editor's TOML checks "
                              "(docs/schema/ holds copies)")
     schema.set_defaults(func=cmd_schema)
-    laws = sub.add_parser("laws", help="list the registered closures, voidage methods, scenes, DEM backends and study reports")
-    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "scenes", "dem_backend", "report"),
+    laws = sub.add_parser("laws", help="list the registered closures, voidage methods, stochastic forces, scenes, DEM "
+                                       "backends and study reports")
+    laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "stochastic_force", "scenes",
+                                                  "dem_backend", "report"),
                       help="only this registry (default: all)")
     laws.add_argument("--json", action="store_true", help="one JSON object")
     laws.set_defaults(func=cmd_laws)

@@ -148,6 +148,8 @@ class Model:
             self.gas.solver.timings = self.timings
         if self.stepping == "coupled":  # before the gas restore: the bridge maps a start-up voidage
             self.bridge = CouplingBridge(case, self.dem, self.gas)
+            if state is not None:
+                self.bridge.restore(state)
         if state is not None and self.gas is not None:  # the last step's voidage, not a remapped one
             self.gas.restore(state)
 
@@ -197,6 +199,8 @@ class Model:
             state.update(self.dem.state())
         if self.gas is not None:
             state.update(self.gas.state())
+        if self.bridge is not None:
+            state.update(self.bridge.state())
         return state
 
 

@@ -12,6 +12,9 @@ from the drag balance, independent of the suspension runs).
     python tools/validate_hindered_settling.py --aspect-ratio 2 --ga-e 1296 --json
     python tools/validate_hindered_settling.py --aspect-ratio 4 --ga 864 --json
     python tools/validate_hindered_settling.py --sphere --ga 864 --json
+    python tools/validate_hindered_settling.py --aspect-ratio 4 --ga-e 1296 --fractions 0.2 0.29 0.4 \
+        --drag tang --stochastic-force force-langevin --json   (the particle velocity fluctuations with the
+        stochastic drag force, fvdem/coupling/stochastic.py; --fluctuations OUTPUT ... charts saved sweeps)
 
 The box is Derksen's 9 d x 9 d x 18 d where the periodic neighbour search allows it (box at least
 3 x the particle length plus skin), else the smallest n d x n d x 2n d that does (14 x 14 x 28 for
@@ -33,7 +36,8 @@ import numpy as np
 FRACTIONS = (0.1, 0.2, 0.29, 0.4, 0.48)
 
 
-def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1, drag=None):
+def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1, drag=None, stochastic_force=None,
+          stochastic_scale=None, cfd_divisor=1, stochastic_along_scale=None):
     d_over_length = 1.0 if sphere else aspect_ratio + 1.0 / 3.0  # particle length in d
     reach = d_over_length + 0.1
     side = max(9, math.ceil(3.0 * reach + 1e-9))
@@ -52,6 +56,17 @@ def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1, drag=None):
              "output": {"progress": False, "vtk": False, "timeseries_interval": "2 ms"}}
     if drag is not None:
         table["coupling"] = {"drag": drag}
+    if stochastic_force is not None:
+        table.setdefault("coupling", {}).update(stochastic_force=stochastic_force, stochastic_seed=seed)
+    if stochastic_scale is not None:
+        table.setdefault("coupling", {})["stochastic_scale"] = stochastic_scale
+    if stochastic_along_scale is not None:
+        table.setdefault("coupling", {})["stochastic_along_scale"] = stochastic_along_scale
+    if cfd_divisor > 1:  # the scene's CFD step divided, to the nearest whole multiple of its DEM step
+        from fvdem.case import case_from_dict
+        case = case_from_dict(table)
+        multiple = max(1, round(case.gas.cfd_step / case.time.dem_step / cfd_divisor))
+        table.setdefault("gas", {})["cfd_step"] = multiple * case.time.dem_step
     return table
 
 
@@ -63,7 +78,13 @@ def run_one(table, threads):
     sim = Simulation(case, threads=threads, progress=False)
     summary = sim.run()
     result = dict(summary["suspension"])
-    result.update(particles=case.particles.count, wall_seconds=time.perf_counter() - wall0,
+    # the mean drag's exchange number beta dt / (rho eps), beta = phi (1 - phi)^2 (rho_p - rho) g / u_s in a
+    # force-balanced suspension: the exact exchange's explicit return needs it below about 1 (docs/coupling.md)
+    phi, gravity = result["solids_fraction"], float(np.linalg.norm(case.domain.gravity))
+    exchange = (phi * (1.0 - phi) * (case.particles.density - case.gas.density) / case.gas.density * gravity
+                * case.gas.cfd_step / result["settling_velocity"])
+    result.update(particles=case.particles.count, wall_seconds=time.perf_counter() - wall0, cfd_step=case.gas.cfd_step,
+                  exchange_number=exchange,
                   cpu_seconds=time.process_time() - cpu0, simulated_seconds=sim.time,
                   box=list(case.suspension.box), cells=list(case.gas.cells),
                   max_overlap_over_diameter=summary["max_overlap_over_diameter"])
@@ -108,13 +129,31 @@ def main(argv=None):
     from fvdem.coupling.closures import law_names
     parser.add_argument("--drag", choices=tuple(n for n in law_names("drag") if n != "none"),
                         help="drag closure (fvdem laws drag; default: the case's, Hoelzer-Sommerfeld + Di Felice)")
+    from fvdem.coupling.stochastic import stochastic_force_names
+    parser.add_argument("--stochastic-force", choices=stochastic_force_names(),
+                        help="stochastic drag fluctuation (fvdem laws stochastic_force; default: the case's, none)")
+    parser.add_argument("--stochastic-scale", type=float,
+                        help="factor on the stochastic force's standard deviations (default 1: as published)")
+    parser.add_argument("--stochastic-along-scale", type=float,
+                        help="factor on its standard deviation along the slip alone (default 1: as published)")
+    parser.add_argument("--seed", type=int, default=1, help="insertion and stochastic-force seed of every run")
+    parser.add_argument("--cfd-divisor", type=int, default=1,
+                        help="divide the scene's CFD step by this (whole DEM steps): the exchange's explicit return "
+                             "needs beta dt / (rho eps) below about 1 (docs/coupling.md), which a strong drag at "
+                             "<phi> = 0.4 exceeds at the scene's step")
     parser.add_argument("--out", default=".")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
                         help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
+    parser.add_argument("--fluctuations", nargs="+", metavar="OUTPUT",
+                        help="draw the velocity fluctuations of saved outputs (with and without a stochastic force) "
+                             "against <phi>, one panel per shape, into hindered_fluctuations.png; run nothing")
     args = parser.parse_args(argv)
     if args.combine:
         print(_combined_plot(Path(args.out) / "hindered_settling.png", args.combine))
+        return
+    if args.fluctuations:
+        print(_fluctuation_plot(Path(args.out) / "hindered_fluctuations.png", args.fluctuations))
         return
     if args.ga is None and args.ga_e is None:
         args.ga_e = 1296.0
@@ -122,7 +161,9 @@ def main(argv=None):
         args.fractions, args.duration = [0.1, 0.29, 0.48], 6.0
     Path(args.out).mkdir(parents=True, exist_ok=True)  # before the runs: a missing folder lost a sweep's result
     wall0 = time.perf_counter()
-    tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration, drag=args.drag)
+    tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration, seed=args.seed,
+                    drag=args.drag, stochastic_force=args.stochastic_force, stochastic_scale=args.stochastic_scale,
+                    cfd_divisor=args.cfd_divisor, stochastic_along_scale=args.stochastic_along_scale)
               for phi in args.fractions]
     # one task per fraction on fvdem's sweep engine (the Dask clients of fvdem study)
     from fvdem.study import map_tasks
@@ -146,19 +187,27 @@ def main(argv=None):
     tag = ("sphere" if args.sphere else f"ar{args.aspect_ratio:g}") + (f"_ga{args.ga:g}" if args.ga else f"_gae{args.ga_e:g}")
     if args.drag:
         tag += f"_{args.drag}"
+    if args.stochastic_force not in (None, "none"):
+        tag += f"_{args.stochastic_force}" + (f"x{args.stochastic_scale:g}" if args.stochastic_scale else "") + (
+            f"_along{args.stochastic_along_scale:g}" if args.stochastic_along_scale is not None else "")
     out = Path(args.out)
     plots = _plots(out, tag, results, fit)
     result = {
         "shape": "sphere" if args.sphere else "cylinder (equal-volume spherocylinder)",
         "aspect_ratio": None if args.sphere else args.aspect_ratio,
         "galileo": args.ga, "galileo_equivalent": args.ga_e, "drag": tables[0].get("coupling", {}).get("drag", "case"),
+        "stochastic_force": args.stochastic_force or "none", "stochastic_scale": args.stochastic_scale or 1.0,
+        "stochastic_along_scale": 1.0 if args.stochastic_along_scale is None else args.stochastic_along_scale,
+        "seed": args.seed, "cfd_divisor": args.cfd_divisor,
         "re_by_phi": {f"{phi:g}": r["slip_reynolds"] for phi, r in zip(args.fractions, results)},
         "re_standard_error_by_phi": {f"{phi:g}": r["slip_reynolds_standard_error"] for phi, r in zip(args.fractions, results)},
         "re_inf": fit["re_inf"], "n_exponent": fit["n_exponent"], "fit_r2": fit["r2"],
         "richardson_zaki_n": richardson_zaki_exponent(fit["re_inf"]),
         "single_particle_terminal_re": re_terminal,
         "fluctuations_by_phi": {f"{phi:g}": {"vertical": r["velocity_fluctuation_vertical_over_settling"],
-                                             "horizontal": r["velocity_fluctuation_horizontal_over_settling"]}
+                                             "horizontal": r["velocity_fluctuation_horizontal_over_settling"],
+                                             "anisotropy": r["velocity_fluctuation_vertical_over_settling"]
+                                             / r["velocity_fluctuation_horizontal_over_settling"]}
                                 for phi, r in zip(args.fractions, results)},
         "mean_abs_cos_vertical_by_phi": {f"{phi:g}": r.get("mean_abs_cos_vertical") for phi, r in zip(args.fractions, results)},
         "runs": results, "plots": plots, "duration_viscous_times": args.duration,
@@ -191,6 +240,46 @@ def _combined_plot(path, outputs):
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
     axes[0].set_ylabel("slip Reynolds number Re")
+    return _save(fig, path)
+
+
+def _fluctuation_plot(path, outputs):
+    """sigma_z/u_s, sigma_h/u_s and their ratio against <phi> of saved sweeps: one column of panels per shape,
+    one colour per stochastic force (with its calibration), the sweeps of the same shape and force joined into
+    one line (e.g. <phi> = 0.4 run apart with a smaller CFD step; a later output replaces an earlier one's
+    point at the same <phi>), the target band of the ratio shaded."""
+    from fvdem.analysis.plots import _pyplot, _save
+    plt = _pyplot()
+    lines = {}
+    for name in outputs:
+        r = json.loads(Path(name).read_text().strip().splitlines()[-1])
+        shape = "sphere" if r["aspect_ratio"] is None else f"l/d = {r['aspect_ratio']:g}"
+        model = r.get("stochastic_force", "none")
+        scale, along = r.get("stochastic_scale", 1.0), r.get("stochastic_along_scale", 1.0)
+        label = "no stochastic force" if model == "none" else model + ("" if scale == 1.0 else f" x {scale:g}") + (
+            "" if along == 1.0 else f", along-slip x {along:g}")
+        points = lines.setdefault((shape, r["drag"]), {}).setdefault(label, {})
+        points.update({float(phi): (f["vertical"], f["horizontal"]) for phi, f in r["fluctuations_by_phi"].items()})
+    shapes = sorted(lines)
+    fig, axes = plt.subplots(2, len(shapes), figsize=(5.0 * len(shapes), 7.0), squeeze=False, sharex=True)
+    for column, (shape, drag) in enumerate(shapes):
+        top, bottom = axes[0, column], axes[1, column]
+        for label, points in lines[(shape, drag)].items():
+            phi = sorted(points)
+            vertical, horizontal = np.array([points[p] for p in phi]).T
+            line, = top.plot(phi, vertical, "o-", label=f"{label}: vertical")
+            top.plot(phi, horizontal, "s--", color=line.get_color(), label=f"{label}: horizontal")
+            bottom.plot(phi, vertical / horizontal, "o-", color=line.get_color(), label=label)
+        top.axhline(0.2, color="grey", lw=0.8, ls=":")
+        top.set_title(f"{shape}, {drag} drag", fontsize=9)
+        top.set_ylabel("velocity fluctuation / settling velocity")
+        bottom.axhspan(1.5, 3.0, color="green", alpha=0.1, label="target 1.5-3")
+        bottom.set_yscale("log")
+        bottom.set_ylabel("sigma_z / sigma_h")
+        bottom.set_xlabel("<phi>")
+        for ax in (top, bottom):
+            ax.grid(alpha=0.3, which="both")
+            ax.legend(fontsize=7)
     return _save(fig, path)
 
 

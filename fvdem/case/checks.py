@@ -73,6 +73,13 @@ def _coupling_checks(case: Case, problems: list) -> None:
             problems.append(f"coupling.{kind} = {chosen.name!r}: its coefficients are fitted for aspect ratio "
                             f"{chosen.aspect_ratio:g}; the particles have {aspect:.3g} (use 'hoelzer-sommerfeld' "
                             "drag and no lift/torque)")
+    if c.stochastic_force != "none":
+        if p.fixed:
+            problems.append(f"coupling.stochastic_force = {c.stochastic_force!r}: fixed particles do not move; the "
+                            "stochastic force is for moving particles (set it to 'none')")
+        elif c.drag == "none":
+            problems.append(f"coupling.stochastic_force = {c.stochastic_force!r}: its level is a fraction of the "
+                            "drag, and coupling.drag = 'none' (choose a drag law or set it to 'none')")
 
 
 def _cross_checks(case: Case, problems: list) -> None:

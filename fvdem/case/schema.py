@@ -7,6 +7,7 @@ from dataclasses import MISSING, dataclass, field
 from pathlib import Path
 
 from ..coupling.closures import describe_laws, law_names
+from ..coupling.stochastic import describe_stochastic_forces, stochastic_force_names
 from ..coupling.voidage import describe_voidage, voidage_names
 from ..dem.backends import backend_names, describe_backends
 from ..dem.contact_law import collision_time
@@ -44,6 +45,7 @@ REGISTRIES = {
     "lift": (lambda: law_names("lift"), lambda: describe_laws("lift"), "fvdem.coupling.closures"),
     "torque": (lambda: law_names("torque"), lambda: describe_laws("torque"), "fvdem.coupling.closures"),
     "voidage": (voidage_names, describe_voidage, "fvdem.coupling.voidage"),
+    "stochastic_force": (stochastic_force_names, describe_stochastic_forces, "fvdem.coupling.stochastic"),
     "dem_backend": (backend_names, describe_backends, "fvdem.dem.backends"),
 }
 
@@ -260,6 +262,22 @@ class CouplingConfig:
                                 doc="viscous resistance to particle rotation: 'stokes' applies pi mu d_e^3 omega "
                                     "(the volume-equivalent sphere's), integrated exactly over the CFD step; "
                                     "negligible in a gas, it sets the orientations of rods in a liquid")
+    stochastic_force: str = spec("none", kind="str", registry="stochastic_force",
+                                 doc="drag fluctuation each particle feels from its neighbours, unresolved by the "
+                                     "grid: a per-particle Ornstein-Uhlenbeck force along and across the slip whose "
+                                     "reaction goes to the gas (fvdem/coupling/stochastic.py; docs/validation.md, "
+                                     "\"Velocity fluctuations with a stochastic drag force\")")
+    stochastic_seed: int = spec(1, kind="int", ge=0, le=2**63 - 1,
+                                doc="seed of the stochastic force's random stream (numpy PCG64; its state is kept "
+                                    "in checkpoints)")
+    stochastic_scale: float = spec(1.0, gt=0.0, le=10.0,
+                                   doc="factor on the stochastic force's standard deviations: 1 is the model as "
+                                       "published; any other value is a calibration")
+    stochastic_along_scale: float = spec(1.0, ge=0.0, le=10.0,
+                                         doc="factor on the stochastic force's standard deviation along the slip "
+                                             "alone (on top of stochastic_scale): the share of the along-slip "
+                                             "fluctuation the grid does not resolve; 1 is the model as published, "
+                                             "any other value a calibration")
 
 
 @dataclass(frozen=True)

@@ -8,8 +8,10 @@ Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
 2. **Closures** at the particles: gas velocity (reconstructed from the face fluxes:
    ``GasSolver.flux_velocity``, exact across voidage jumps) and voidage interpolated, slip
    ``u - v``, drag coefficient ``c`` [kg/s] (drag ``F_D = c (u - v)``), lift and torque, each law's
-   compiled kernel (``kernels.py``; the numpy closures are the reference they are tested against).
-3. **Gas step** with Eq. 8, ``R = -sum (F_D + F_L) / V_cell``, deposited with the transposed
+   compiled kernel (``kernels.py``; the numpy closures are the reference they are tested against);
+   with ``coupling.stochastic_force``, each particle's drag fluctuation ``F''`` for the interval
+   (``stochastic.py``: an Ornstein-Uhlenbeck process per particle, held over the interval like the lift).
+3. **Gas step** with Eq. 8, ``R = -sum (F_D + F_L + F'') / V_cell``, deposited with the transposed
    interpolation weights. *Semi-implicit* (default): the drag enters the gas momentum as
    ``-beta u + S``. The coefficient accounts for the particle's own response over the interval:
    a particle kicked implicitly towards ``u`` with its other forces ``m a`` held gains the drag
@@ -45,6 +47,7 @@ from ..errors import SimulationError
 from . import closures
 from .interpolation import ParticleGridMap
 from .kernels import column_sums, exchange_terms, particle_forces, slip_at_particles
+from .stochastic import StochasticForce
 from .voidage import METHODS as VOIDAGE_METHODS
 from .voidage import voidage as map_voidage
 
@@ -130,6 +133,10 @@ class CouplingBridge:
         self._rotational_coefficient = np.pi * case.gas.viscosity * p.equivalent_diameter ** 3
         self.substeps = max(1, round(case.gas.cfd_step / case.time.dem_step))
         self.semi_implicit = cfg.drag_treatment == "semi-implicit"
+        # the drag fluctuation felt from the neighbours (``coupling.stochastic_force``; ``stochastic.py``)
+        self.stochastic = None if cfg.stochastic_force == "none" or p.fixed else StochasticForce(
+            cfg.stochastic_force, dem.particles.count, cfg.stochastic_seed, cfg.stochastic_scale,
+            p.equivalent_diameter, case.gas.density, case.gas.viscosity, cfg.stochastic_along_scale)
         self._inputs = CouplingInputs.zeros(dem.particles.count)  # the DEM's coupling inputs: the bridge's buffers
         self.mesh = gas.mesh
         self.last: dict = {"drag_force": np.zeros(3), "pressure_force": np.zeros(3), "momentum_returned": 0.0}
@@ -190,6 +197,11 @@ class CouplingBridge:
         eps_p, slip = slip_at_particles(at_particles, p.velocity, cfg.minimum_voidage, self.fixed, np.empty(n),
                                         np.empty((n, 3)))
         c, lift, torque = self.model.evaluate(slip, eps_p, p.axis)
+        held = lift  # the forces held over the interval on both sides: lift and the stochastic force
+        if self.stochastic is not None:
+            fluctuation = self.stochastic.force(p, slip, eps_p, c, dt)
+            held = fluctuation if lift is None else lift + fluctuation
+            self.last["stochastic_force"] = fluctuation
         volume_cells = mesh.cell_volumes[:, None]
         explicit_drag = None
         if not self.semi_implicit:
@@ -199,11 +211,11 @@ class CouplingBridge:
             if explicit_drag is not None or self.fixed:
                 beta = np.zeros(mesh.cell_count) if explicit_drag is not None else scatter(c)
                 exchanged = np.zeros_like(slip) if explicit_drag is None else -explicit_drag
-                source = scatter(exchanged if lift is None else exchanged - lift)
+                source = scatter(exchanged if held is None else exchanged - held)
             else:  # response, coefficient, source and their deposition in one kernel pass
                 t = clock()
                 beta, source = exchange_terms(p.mass, c, p.velocity, p.contact_force + p.external_force,
-                                              np.asarray(dem.gravity, float), _NO_LIFT if lift is None else lift,
+                                              np.asarray(dem.gravity, float), _NO_LIFT if held is None else held,
                                               dem.dt, self.substeps, dt, grid_map.cells, grid_map.weights,
                                               grid_map.counts, np.zeros(mesh.cell_count),
                                               np.zeros((mesh.cell_count, 3)))
@@ -222,7 +234,7 @@ class CouplingBridge:
         fluid_velocity, external = inputs.fluid_velocity, inputs.external_force
         pressure_force = particle_forces(at_particles, bool(cfg.pressure_gradient_force), p.radius, p.half_length,
                                          np.asarray(gas.mean_pressure_gradient, float),
-                                         _NO_LIFT if lift is None else lift,
+                                         _NO_LIFT if held is None else held,
                                          _NO_LIFT if explicit_drag is None else explicit_drag, fluid_velocity, external)
         if self.fixed:  # nothing moves: the particles receive the drag at the new gas velocity
             impulse = None if explicit_drag is not None else c[:, None] * fluid_velocity * dt
@@ -242,8 +254,9 @@ class CouplingBridge:
             # the gas lost V (beta u - S) dt per cell (u its momentum velocity); the particles gained
             # the drag impulse the kicks applied (with the flux velocity): return the difference
             lost = gas.exchange_lost(dt)
-            # the lift is explicit on both sides: not in the balance (one deposition of both)
-            difference = lost - scatter(impulse if lift is None else impulse + lift * dt)
+            # the lift and the stochastic force are explicit on both sides: not in the balance (one deposition
+            # of both)
+            difference = lost - scatter(impulse if held is None else impulse + held * dt)
             gas.return_momentum(difference)  # a source of the next gas step
             returned = float(np.abs(difference.sum(axis=0)).max())
         drag_force = column_sums(explicit_drag) if impulse is None else column_sums(impulse) / dt
@@ -266,6 +279,17 @@ class CouplingBridge:
                 f"{response[i]:.3g} s (m / c of particle id {int(self.dem.particles.ids[i])}); use "
                 "coupling.drag_treatment = 'semi-implicit' or a CFD step below "
                 f"{2.0 * response[i]:.3g} s")
+
+    # ------------------------------------------------------------------ checkpoint state
+    def state(self) -> dict:
+        """The bridge's own state: the stochastic force's process and random generator (empty without one)."""
+        return {} if self.stochastic is None else self.stochastic.state()
+
+    def restore(self, data) -> None:
+        """Load a ``state()``; a checkpoint without the stochastic force's state (written without one) starts
+        its process afresh from the case's seed."""
+        if self.stochastic is not None and "stochastic.xi" in data:
+            self.stochastic.restore(data)
 
     # ------------------------------------------------------------------ observables
     def diagnostics(self) -> dict:
