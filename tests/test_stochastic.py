@@ -188,7 +188,8 @@ def _suspension(duration=1.0, model="force-langevin", **suspension):
 def test_the_gas_receives_the_reaction_of_every_particles_fluctuation():
     """One coupling interval from the same state with and without the model: the gas's exchange source
     differs by -sum w F'' / V_cell (Eq. 8) cell by cell, with the interval's deposition weights, and the
-    particles hold -V_p grad p + V_p G + F'' over the interval."""
+    particles hold -V_p grad p + V_p G + F'' over the interval; summed over the box, nothing changes (the
+    mean drag is the closure's)."""
     from fvdem.coupling.interpolation import ParticleGridMap
     runs = {}
     for model in ("force-langevin", "none"):
@@ -202,6 +203,13 @@ def test_the_gas_receives_the_reaction_of_every_particles_fluctuation():
     on, off = runs["force-langevin"], runs["none"]
     fluctuation = on.model.bridge.last["stochastic_force"]  # rows in the order of the interval's start
     assert np.abs(fluctuation).max() > 0
+    # no bias of the mean drag: the fluctuations sum to zero, so the gas's total exchange and the particles'
+    # total force are those without the model, to round-off
+    scale = np.abs(fluctuation).max() * len(fluctuation)
+    np.testing.assert_allclose(fluctuation.sum(axis=0), 0.0, atol=1e-12 * scale)
+    volumes = on.gas.mesh.cell_volumes[:, None]
+    np.testing.assert_allclose(((on.gas.exchange_source - off.gas.exchange_source) * volumes).sum(axis=0), 0.0,
+                               atol=1e-12 * scale)
     mesh = on.gas.mesh
     reaction = -weights.scatter(fluctuation) / mesh.cell_volumes[:, None]
     np.testing.assert_allclose(on.gas.exchange_source - off.gas.exchange_source, reaction, rtol=0,
