@@ -41,11 +41,13 @@ granular temperature [m^2/s^2].
      b_par / 2)`` (``force_langevin_amplitude``).
 
    Mehrabadi, Tenneti, Garg & Subramaniam (2015), J. Fluid Mech. 770, 210-246 (PR-DNS of fixed random
-   sphere assemblies, fitted for 0.1 <= phi <= 0.5 and 0.01 <= Re_m <= 300). The coefficients are written
-   here as the project's author recalls them: the project holds no copy of the paper (flagged: check them
-   against its Eqs. for k^(f) and b^(f)_par before quoting results that hinge on them). Lattanzi et al.
-   (2022) fit sigma_F directly to the drag variance of such assemblies; that fit could not be consulted
-   either, so this closure is built from the published pseudo-turbulence instead. Not included: the
+   sphere assemblies, fitted for 0.1 <= phi <= 0.5 and 0.01 <= Re_m <= 300). The project holds no copy of
+   the paper; the coefficients (2, 2.5, 0.523, 0.305, 0.114, 3.511, 1.801, 0.005) and the split ``2 k_f
+   (1/3 + b_par)`` / ``2 k_f (1/3 - b_par/2)`` agree term by term with two independent public
+   implementations of the same fit (an OpenFOAM pseudo-turbulent momentum model, "Subramaniam", and a
+   Fortran compressible-flow code's "Mehrabadi's terms"), checked 2026-12-07. Lattanzi et al. (2022) fit
+   sigma_F directly to the drag variance of such assemblies; that fit could not be consulted, so this
+   closure is built from the published pseudo-turbulence instead. Not included: the
    along-slip response's extra factor ``1 + d ln c / d ln |W|`` (1.1-1.4 at Re 3-30) of a drag growing
    faster than linearly with the slip (``c`` is held fixed).
 4. The integral time is the mean free time between collisions of the kinetic theory of dense gases
