@@ -407,3 +407,22 @@ def test_rod_bed_with_lift_and_torque_runs_and_reports(tmp_path, closures):
     assert np.abs(p.external_torque).max() > 0.0
     names = {path.name for path in report(tmp_path / "run")}
     assert {"orientation.png", "void_fraction.png", "mixing.png", "timeseries.png"} <= names
+
+
+def test_a_one_way_coupled_run_writes_its_folder_from_the_first_sample(tmp_path):
+    """One-way coupling (``coupling.two_way = false``) with an output folder: the first sample, taken before
+    any step, reports the over-packed cells like a two-way run (it raised KeyError before the voidage was
+    mapped at construction in both modes)."""
+    from pathlib import Path
+    from fvdem.case import load_case
+    root = Path(__file__).resolve().parent.parent
+    case = load_case(root / "cases" / "coupled_small.toml",
+                     {"coupling.two_way": False, "particles.count": 300, "output.progress": False,
+                      "output.vtk": False})
+    sim = fvdem.Simulation(case, tmp_path / "run", progress=False)
+    summary = sim.run(0.005)
+    rows = (tmp_path / "run" / "timeseries.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    assert summary["simulated_time"] == pytest.approx(0.005) and len(rows) >= 3
+    assert "over_packed_cells" in header
+    assert float(rows[1].split(",")[header.index("over_packed_cells")]) == 0.0

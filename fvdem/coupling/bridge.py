@@ -142,8 +142,8 @@ class CouplingBridge:
         self.last: dict = {"drag_force": np.zeros(3), "pressure_force": np.zeros(3), "momentum_returned": 0.0}
         self._map: ParticleGridMap | None = None  # refreshed in place each interval
         self._voidage_map: ParticleGridMap | None = None  # the voidage method's, where its weights differ
+        eps = self._voidage(self._grid_map())  # one-way too: the over-packed cells are measured from the start
         if cfg.two_way:
-            eps = self._voidage(self._grid_map())
             gas.set_voidage(eps, previous=eps)
 
     # ------------------------------------------------------------------ pieces
