@@ -44,3 +44,16 @@ def test_one_case_recorded_twice_is_identical(tmp_path):
     result = subprocess.run([sys.executable, str(ROOT / "tools" / "bit_identity.py"), "--compare", *map(str, files)],
                             capture_output=True, text=True)
     assert result.returncode == 0 and result.stdout.strip().endswith("IDENTICAL")
+
+
+def test_a_run_stopped_half_way_and_resumed_lands_on_the_whole_run(tmp_path):
+    """Every array of the state, the gas solver's counters included, is the whole run's after a stop at half
+    way and a resume (the counters once restarted when no factorization was restored)."""
+    tool = [sys.executable, str(ROOT / "tools" / "bit_identity.py"), "--cases", "suspension"]
+    subprocess.run([*tool, "--out", str(tmp_path / "whole.json")], check=True, capture_output=True)
+    subprocess.run([*tool, "--stop-half", str(tmp_path / "half")], check=True, capture_output=True)
+    subprocess.run([*tool, "--resume", str(tmp_path / "half"), "--out", str(tmp_path / "resumed.json")], check=True,
+                   capture_output=True)
+    result = subprocess.run([*tool[:2], "--compare", str(tmp_path / "whole.json"), str(tmp_path / "resumed.json")],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout

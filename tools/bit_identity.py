@@ -10,6 +10,12 @@ commit and in the new tree, then comparing::
     python tools/bit_identity.py --out /tmp/new.json
     python tools/bit_identity.py --compare /tmp/base.json /tmp/new.json      # exit 1 when anything differs
 
+and a checkpoint the base tree wrote, resumed by the new tree, must land where the base's whole run did::
+
+    (cd /tmp/base && PYTHONPATH=$PWD python /path/to/tools/bit_identity.py --stop-half /tmp/half)
+    python tools/bit_identity.py --resume /tmp/half --out /tmp/resumed.json
+    python tools/bit_identity.py --compare /tmp/base.json /tmp/resumed.json
+
 The tool only uses ``load_case``, ``Simulation`` and ``Model.state()``, which every commit since 0.2 has,
 so the same file runs against an older tree (keep its path outside that tree on ``PYTHONPATH``'s side:
 the base tree's ``fvdem`` must be the one imported). Arrays present in only one record (e.g. a state
@@ -57,7 +63,13 @@ def digest(array) -> str:
     return hashlib.sha256(str(array.dtype).encode() + str(array.shape).encode() + array.tobytes()).hexdigest()
 
 
-def record(names) -> dict:
+def record(names, stop_half=None, resume=None) -> dict:
+    """Each case run its whole duration (``stop_half`` and ``resume`` None); or run half of it into
+    ``stop_half/<case>`` (its checkpoint there, nothing hashed); or a copy of ``resume/<case>`` resumed for the
+    second half and hashed: the record then compares with a whole run's."""
+    import shutil
+    import tempfile
+
     from fvdem import Simulation
     from fvdem.case import load_case
     import fvdem
@@ -66,14 +78,25 @@ def record(names) -> dict:
     for name in names:
         file, overrides, duration = CASES[name]
         case = load_case(ROOT / "cases" / file, {**SMALL, **overrides})
-        sim = Simulation(case, progress=False)
-        if duration is None:  # the suspension: a tenth of its viscous time scale's worth of steps
-            duration = 20 * sim.time_step
-        sim.run(duration)
+        if resume is not None:
+            folder = Path(tempfile.mkdtemp(prefix="bit_identity_")) / name
+            shutil.copytree(Path(resume) / name, folder)  # the checkpoint stays as it was written
+            sim = Simulation(case, folder, resume=True, progress=False)
+        else:
+            folder = None if stop_half is None else Path(stop_half) / name
+            sim = Simulation(case, folder, overwrite=folder is not None, progress=False)
+        steps = 20 if duration is None else int(round(duration / sim.time_step))  # the suspension: 20 steps
+        half = steps // 2
+        if stop_half is not None:
+            sim.run(half * sim.time_step)
+            print(f"{name}: {sim.step_count} steps, checkpoint in {folder}", file=sys.stderr)
+            continue
+        sim.run((steps - sim.step_count) * sim.time_step)
         state = sim.model.state()
+        arrays = {key: value for key, value in sorted(state.items()) if isinstance(value, np.ndarray) or np.isscalar(value)}
         out[name] = {"steps": int(sim.step_count), "time": float(sim.time),
-                     "arrays": {key: digest(value) for key, value in sorted(state.items())
-                                if isinstance(value, np.ndarray) or np.isscalar(value)}}
+                     "arrays": {key: digest(value) for key, value in arrays.items()},
+                     "small": {key: np.asarray(value).tolist() for key, value in arrays.items() if np.size(value) <= 8}}
         print(f"{name}: {out[name]['steps']} steps, {len(out[name]['arrays'])} arrays", file=sys.stderr)
     return out
 
@@ -92,8 +115,10 @@ def compare(a: dict, b: dict) -> list[str]:
         changed = sorted(k for k in keys if k in ra["arrays"] and k in rb["arrays"] and ra["arrays"][k] != rb["arrays"][k])
         only = sorted(keys - (set(ra["arrays"]) & set(rb["arrays"])))
         differ += len(changed)
+        small = {k: f"{k} {ra.get('small', {}).get(k)} against {rb.get('small', {}).get(k)}" for k in changed
+                 if k in ra.get("small", {}) and k in rb.get("small", {})}  # a few numbers: their values
         lines.append(f"{name}: {len(keys) - len(only) - len(changed)} arrays identical, {len(changed)} differ"
-                     + (f" ({', '.join(changed)})" if changed else "")
+                     + (f" ({', '.join(small.get(k, k) for k in changed)})" if changed else "")
                      + (f"; in one record only: {', '.join(only)}" if only else ""))
     lines.append("IDENTICAL" if differ == 0 else f"DIFFERENT: {differ} differences")
     return lines
@@ -103,6 +128,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", help="write the record (JSON) here")
     parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=sorted(CASES))
+    parser.add_argument("--stop-half", metavar="DIR", help="run each case half its steps into DIR/<case> (a "
+                        "checkpoint there), hash nothing")
+    parser.add_argument("--resume", metavar="DIR", help="resume a copy of each DIR/<case> (written by --stop-half, "
+                        "e.g. by an older tree) to the end and record it: it must equal a whole run's record")
     parser.add_argument("--compare", nargs=2, metavar=("BASE", "NEW"), help="compare two records; exit 1 if any differ")
     args = parser.parse_args(argv)
     if args.compare:
@@ -110,7 +139,9 @@ def main(argv=None) -> int:
         lines = compare(a, b)
         print("\n".join(lines))
         return 0 if lines[-1] == "IDENTICAL" else 1
-    result = record(args.cases)
+    result = record(args.cases, args.stop_half, args.resume)
+    if args.stop_half:
+        return 0
     text = json.dumps(result, indent=1, sort_keys=True)
     if args.out:
         Path(args.out).write_text(text + "\n")

@@ -467,6 +467,8 @@ class GasSolver:
                                     data["preconditioner.indptr"]), shape=tuple(data["preconditioner.shape"]))
             self.set_preconditioner_matrix(matrix, since_factor, iterations_since)
             self._refactor_due = bool(refactor_due)
+        else:  # no factorization to restore (multigrid, or none yet): the counts still continue as they were
+            self._steps_since_factor, self._iterations_since_factor = since_factor, iterations_since
 
     def _plan_refactor(self) -> None:
         """After a step: refactor the preconditioner at the next step when this step's CG iterations
