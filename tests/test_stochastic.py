@@ -314,7 +314,7 @@ def test_the_stochastic_force_leaves_the_mean_slip_within_its_spread():
     three combined batch-means standard errors of the one without it, while the horizontal fluctuations
     grow several-fold (l/d = 2, <phi> = 0.29, Ga_e = 1296, Tang's drag, 6 viscous times). The part along
     the slip drives the resolved concentration waves and with them the mean slip (+9 % here over 20 viscous
-    times, docs/validation.md); that is the resolved flow's response, not a bias of the force."""
+    times, docs/validation-suspension.md); that is the resolved flow's response, not a bias of the force."""
     results = {}
     for model in ("force-langevin", "none"):
         table = _suspension(duration=6.0, model=model)

@@ -265,7 +265,7 @@ class CouplingConfig:
     stochastic_force: str = spec("none", kind="str", registry="stochastic_force",
                                  doc="drag fluctuation each particle feels from its neighbours, unresolved by the "
                                      "grid: a per-particle Ornstein-Uhlenbeck force along and across the slip whose "
-                                     "reaction goes to the gas (fvdem/coupling/stochastic.py; docs/validation.md, "
+                                     "reaction goes to the gas (fvdem/coupling/stochastic.py; docs/validation-suspension.md, "
                                      "\"Velocity fluctuations with a stochastic drag force\")")
     stochastic_seed: int = spec(1, kind="int", ge=0, le=2**63 - 1,
                                 doc="seed of the stochastic force's random stream (numpy PCG64; its state is kept "

@@ -6,7 +6,7 @@ grid of cells a few diameters wide cannot resolve, as a per-particle Ornstein-Uh
 particle-resolved simulation each particle's force departs from that mean by tens of per cent, along and
 across the mean slip, because its neighbours sit differently around it; this neighbour-to-neighbour
 variation drives the particles' horizontal velocity fluctuations in a fluidized suspension. An unresolved
-CFD-DEM, whose cells are three diameters wide, sees none of it (docs/validation.md, "Hindered settling of
+CFD-DEM, whose cells are three diameters wide, sees none of it (docs/validation-suspension.md, "Hindered settling of
 a periodic suspension": horizontal fluctuations 0.02-0.2 of the settling velocity against 1/3-2/3 in
 resolved simulations and experiments). Lattanzi, Tavanashad, Subramaniam & Capecelatro (2022) close the
 gap with a stochastic force; ``force-langevin`` is that model's structure.
