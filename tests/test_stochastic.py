@@ -331,18 +331,30 @@ def test_the_stochastic_force_leaves_the_mean_slip_within_its_spread():
 
 
 def test_the_sweeps_fluctuations_are_charted_from_saved_outputs(tmp_path, capsys):
-    """``validate_hindered_settling.py --fluctuations``: saved sweeps with and without the force on one chart."""
+    """``validate_hindered_settling.py --fluctuations``: saved sweeps with and without the force on one chart,
+    replicas (other seeds, same step) averaged in its table, an output at another step replacing a point."""
     import sys
     from pathlib import Path
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
     import validate_hindered_settling as tool
     outputs = []
-    for model, horizontal in (("none", 0.08), ("force-langevin", 0.35)):
-        sweep = {"aspect_ratio": 4.0, "drag": "tang", "stochastic_force": model, "stochastic_scale": 1.0,
-                 "fluctuations_by_phi": {phi: {"vertical": 0.9, "horizontal": horizontal} for phi in ("0.2", "0.4")}}
-        path = tmp_path / f"{model}.txt"
+    for k, (model, horizontal, re, divisor) in enumerate((("none", 0.08, 5.0, 1), ("none", 0.08, 4.0, 3),
+                                                          ("force-langevin", 0.3, 6.0, 3),
+                                                          ("force-langevin", 0.6, 4.0, 3))):
+        sweep = {"aspect_ratio": 4.0, "drag": "tang", "stochastic_force": model, "stochastic_scale": 2.0,
+                 "stochastic_along_scale": 0.0, "cfd_divisor": divisor,
+                 "fluctuations_by_phi": {"0.4": {"vertical": 0.9, "horizontal": horizontal}},
+                 "re_by_phi": {"0.4": re}}
+        path = tmp_path / f"{k}.txt"
         path.write_text("a progress line\n" + json.dumps(sweep) + "\n")
         outputs.append(str(path))
     tool.main(["--fluctuations", *outputs, "--out", str(tmp_path)])
     chart = Path(capsys.readouterr().out.strip())
     assert chart == tmp_path / "hindered_fluctuations.png" and chart.stat().st_size > 10000
+    rows = {row.split("|")[3].strip(): [c.strip() for c in row.split("|")[1:-1]]
+            for row in (tmp_path / "hindered_fluctuations.md").read_text().splitlines()[2:]}
+    # the no-force point at x 1 replaced by the one at x 1/3; the two forced runs are replicas
+    assert rows["no stochastic force"][3:6] == ["x 1/3", "1", "4.00"]
+    forced = rows["force-langevin x 2, along-slip x 0"]
+    assert forced[4] == "2" and forced[5] == "5.00 ± 1.41" and forced[6] == "+25.0 %"
+    assert forced[8] == "0.45 ± 0.21" and forced[9] == "2.25 ± 1.06 (1.50-3.00)"

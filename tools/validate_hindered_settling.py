@@ -243,13 +243,11 @@ def _combined_plot(path, outputs):
     return _save(fig, path)
 
 
-def _fluctuation_plot(path, outputs):
-    """sigma_z/u_s, sigma_h/u_s and their ratio against <phi> of saved sweeps: one column of panels per shape,
-    one colour per stochastic force (with its calibration), the sweeps of the same shape and force joined into
-    one line (e.g. <phi> = 0.4 run apart with a smaller CFD step; a later output replaces an earlier one's
-    point at the same <phi>), the target band of the ratio shaded."""
-    from fvdem.analysis.plots import _pyplot, _save
-    plt = _pyplot()
+def _fluctuation_points(outputs):
+    """``{(shape, drag): {label: {phi: [(vertical, horizontal, Re, cfd_divisor), ...]}}}`` of saved sweeps: the
+    runs of one shape, drag and stochastic force (with its calibration) at one <phi> are replicas (other seeds)
+    where their CFD step is the same; an output at another step replaces the earlier ones' point at that <phi>
+    (e.g. <phi> = 0.4 run again with a third of the step)."""
     lines = {}
     for name in outputs:
         r = json.loads(Path(name).read_text().strip().splitlines()[-1])
@@ -259,17 +257,69 @@ def _fluctuation_plot(path, outputs):
         label = "no stochastic force" if model == "none" else model + ("" if scale == 1.0 else f" x {scale:g}") + (
             "" if along == 1.0 else f", along-slip x {along:g}")
         points = lines.setdefault((shape, r["drag"]), {}).setdefault(label, {})
-        points.update({float(phi): (f["vertical"], f["horizontal"]) for phi, f in r["fluctuations_by_phi"].items()})
+        divisor = r.get("cfd_divisor", 1)
+        for phi, f in r["fluctuations_by_phi"].items():
+            runs = points.setdefault(float(phi), [])
+            if runs and runs[0][3] != divisor:
+                runs.clear()
+            runs.append((f["vertical"], f["horizontal"], r["re_by_phi"][phi], divisor))
+    return lines
+
+
+def _fluctuation_table(lines) -> str:
+    """A Markdown table of the points: per shape, <phi> and force the replicas' mean and standard deviation
+    (n > 1) of Re, sigma_z/u_s, sigma_h/u_s and sigma_z/sigma_h (the ratio's range too), and the mean Re's
+    departure from the runs without a force at the same <phi> and step."""
+    rows = ["| shape | <phi> | stochastic force | CFD step | runs | Re | dRe vs none | sigma_z/u_s | sigma_h/u_s | "
+            "sigma_z/sigma_h (range) |", "|---|---|---|---|---|---|---|---|---|---|"]
+
+    def stat(values):
+        values = np.asarray(values, dtype=float)
+        return f"{values.mean():.2f}" + (f" ± {values.std(ddof=1):.2f}" if len(values) > 1 else "")
+    for (shape, drag), labels in sorted(lines.items()):
+        none = labels.get("no stochastic force", {})
+        for label, points in labels.items():
+            for phi in sorted(points):
+                runs = np.array(points[phi], dtype=float)
+                vertical, horizontal, re, divisor = runs.T
+                ratio = vertical / horizontal
+                base = np.array(none.get(phi, []), dtype=float)
+                same_step = base[base[:, 3] == divisor[0]] if len(base) else base
+                change = (f"{100 * (re.mean() / same_step[:, 2].mean() - 1):+.1f} %"
+                          if len(same_step) and label != "no stochastic force" else "-")
+                rows.append(f"| {shape}, {drag} | {phi:g} | {label} | x 1/{int(divisor[0])} | {len(runs)} | {stat(re)} | "
+                            f"{change} | {stat(vertical)} | {stat(horizontal)} | {stat(ratio)} "
+                            f"({ratio.min():.2f}-{ratio.max():.2f}) |")
+    return "\n".join(rows)
+
+
+def _fluctuation_plot(path, outputs):
+    """sigma_z/u_s, sigma_h/u_s and their ratio against <phi> of saved sweeps: one column of panels per shape,
+    one colour per stochastic force (with its calibration), replicas averaged (bars: their range), the target
+    band of the ratio shaded; the table of ``_fluctuation_table`` beside it (``hindered_fluctuations.md``)."""
+    from fvdem.analysis.plots import _pyplot, _save
+    plt = _pyplot()
+    lines = _fluctuation_points(outputs)
+    Path(path).with_suffix(".md").write_text(_fluctuation_table(lines) + "\n")
     shapes = sorted(lines)
     fig, axes = plt.subplots(2, len(shapes), figsize=(5.0 * len(shapes), 7.0), squeeze=False, sharex=True)
     for column, (shape, drag) in enumerate(shapes):
         top, bottom = axes[0, column], axes[1, column]
         for label, points in lines[(shape, drag)].items():
             phi = sorted(points)
-            vertical, horizontal = np.array([points[p] for p in phi]).T
-            line, = top.plot(phi, vertical, "o-", label=f"{label}: vertical")
-            top.plot(phi, horizontal, "s--", color=line.get_color(), label=f"{label}: horizontal")
-            bottom.plot(phi, vertical / horizontal, "o-", color=line.get_color(), label=label)
+            runs = [np.array(points[p], dtype=float) for p in phi]
+            vertical, horizontal = (np.array([r[:, k].mean() for r in runs]) for k in (0, 1))
+            ratio = [r[:, 0] / r[:, 1] for r in runs]
+
+            def bars(values, centre):
+                return np.array([centre - [v.min() for v in values], [v.max() for v in values] - centre])
+            line = top.errorbar(phi, vertical, yerr=bars([r[:, 0] for r in runs], vertical), fmt="o-", capsize=3,
+                                label=f"{label}: vertical")[0]
+            top.errorbar(phi, horizontal, yerr=bars([r[:, 1] for r in runs], horizontal), fmt="s--", capsize=3,
+                         color=line.get_color(), label=f"{label}: horizontal")
+            middle = np.array([v.mean() for v in ratio])
+            bottom.errorbar(phi, middle, yerr=bars(ratio, middle), fmt="o-", capsize=3, color=line.get_color(),
+                            label=label)
         top.axhline(0.2, color="grey", lw=0.8, ls=":")
         top.set_title(f"{shape}, {drag} drag", fontsize=9)
         top.set_ylabel("velocity fluctuation / settling velocity")
@@ -279,7 +329,7 @@ def _fluctuation_plot(path, outputs):
         bottom.set_xlabel("<phi>")
         for ax in (top, bottom):
             ax.grid(alpha=0.3, which="both")
-            ax.legend(fontsize=7)
+            ax.legend(fontsize=6)
     return _save(fig, path)
 
 
