@@ -132,6 +132,8 @@ def main(argv=None) -> int:
                         "checkpoint there), hash nothing")
     parser.add_argument("--resume", metavar="DIR", help="resume a copy of each DIR/<case> (written by --stop-half, "
                         "e.g. by an older tree) to the end and record it: it must equal a whole run's record")
+    parser.add_argument("--quick", action="store_true", help="the suspension case alone (20 steps; seconds)")
+    parser.add_argument("--json", action="store_true", help="print the record as one JSON line")
     parser.add_argument("--compare", nargs=2, metavar=("BASE", "NEW"), help="compare two records; exit 1 if any differ")
     args = parser.parse_args(argv)
     if args.compare:
@@ -139,14 +141,13 @@ def main(argv=None) -> int:
         lines = compare(a, b)
         print("\n".join(lines))
         return 0 if lines[-1] == "IDENTICAL" else 1
-    result = record(args.cases, args.stop_half, args.resume)
+    result = record(["suspension"] if args.quick else args.cases, args.stop_half, args.resume)
     if args.stop_half:
         return 0
-    text = json.dumps(result, indent=1, sort_keys=True)
     if args.out:
-        Path(args.out).write_text(text + "\n")
-    else:
-        print(text)
+        Path(args.out).write_text(json.dumps(result, indent=1, sort_keys=True) + "\n")
+    if args.json or not args.out:
+        print(json.dumps(result, sort_keys=True))
     return 0
 
 
