@@ -179,6 +179,24 @@ def test_the_fingerprint_follows_the_registry_and_the_laws_source_files(tmp_path
     assert there.stdout.strip() == here
 
 
+def test_generated_loops_unused_for_a_while_are_removed_with_their_caches(tmp_path):
+    """When a module is written, those not used (touched) for ``STALE_DAYS`` go, with numba's and Python's caches
+    of them; the one in use and recently used ones stay."""
+    import os
+    import time
+
+    from fvdem.coupling import law_loops
+    (tmp_path / "__pycache__").mkdir()
+    names = {age: f"{law_loops.PREFIX}{age:016d}" for age in (0, 2, law_loops.STALE_DAYS + 1)}
+    for age, name in names.items():
+        for path in (tmp_path / f"{name}.py", tmp_path / "__pycache__" / f"{name}.drag_loop-46.py311.nbi"):
+            path.write_text("")
+            os.utime(path, (time.time() - age * 86400,) * 2)
+    law_loops._remove_stale(tmp_path, names[0])
+    left = {p.name.split(".")[0] for p in tmp_path.rglob("*") if p.is_file()}
+    assert left == {names[0], names[2]}
+
+
 @pytest.mark.parametrize("kind", ["drag", "lift", "torque"])
 def test_the_fast_loops_run_every_registered_law_by_its_index_and_list_what_fvdem_laws_lists(kind, capsys):
     """The loops' index is the registry's order, which ``fvdem laws KIND`` lists; index k runs the law

@@ -169,6 +169,7 @@ def _write(path: Path, text: str) -> None:
     handle, temporary = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
     with os.fdopen(handle, "w") as out:
         out.write(text)
+    os.chmod(temporary, 0o644)  # readable like any source file (mkstemp's is the owner's only)
     os.replace(temporary, path)
 
 
@@ -212,6 +213,8 @@ def build(registry: dict):
         except FileNotFoundError:
             _write(path, header + body)
             _remove_stale(folder, name)
+        except OSError:  # another user's, in a shared cache: used as it is
+            pass
         spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
