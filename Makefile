@@ -50,8 +50,9 @@ bench: $(STAMP)
 clean:
 	rm -rf $(VENV) build *.egg-info demo_out smoke_out
 
-clean-cache:  # numba caches are invalidated only by edits to a kernel's own file
+clean-cache:  # numba caches are invalidated only by edits to a kernel's own file; the law loops' modules too
 	find fvdem -name '*.nbi' -delete -o -name '*.nbc' -delete
+	rm -rf "$${XDG_CACHE_HOME:-$$HOME/.cache}/fvdem/law_loops" $${NUMBA_CACHE_DIR:+"$$NUMBA_CACHE_DIR/fvdem_law_loops"}
 
 smoke: $(STAMP)  # the validation tools' quick modes (CI runs them after the tests)
 	mkdir -p smoke_out

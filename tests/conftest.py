@@ -17,6 +17,13 @@ from fvdem.dem.system import Box, ContactModel, DEMSystem  # noqa: E402
 
 SPHERE_D = 5.3e-3
 DENSITY = 1442.0
+PAPER_STIFFNESS = 2.0e4  # [N/m], Mema et al. (2020) Table 5: the spring the small DEM scenes were written for
+
+
+def paper_contact(**parameters) -> ContactModel:
+    """The contact law with the paper's spring (``PAPER_STIFFNESS``), the other parameters the case's defaults
+    unless given."""
+    return ContactModel(**{"normal_stiffness": PAPER_STIFFNESS, **parameters})
 
 
 def make_system(position, radius, half_length=0.0, velocity=None, axis=None, box=None, contact=None,
@@ -26,7 +33,7 @@ def make_system(position, radius, half_length=0.0, velocity=None, axis=None, box
     particles = ParticleArrays.create(np.asarray(position, float), radius, half_length, DENSITY, axis=axis,
                                       velocity=None if velocity is None else np.asarray(velocity, float))
     box = box or Box((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), (True, True, True))
-    contact = contact or ContactModel()
+    contact = contact or paper_contact()
     if dt is None:
         dt = contact.collision_time(float(particles.mass.min())) / steps_per_collision
     return DEMSystem(particles, box, contact, dt, gravity, skin)

@@ -4,10 +4,10 @@ import math
 import numpy as np
 import pytest
 
-from fvdem.dem.contact_law import collision_time, damping_ratio
+from fvdem.dem.contact_law import ZETA_N, collision_time, damping_ratio
 from fvdem.dem.system import Box, ContactModel
 
-from conftest import DENSITY, SPHERE_D, by_id, make_system
+from conftest import DENSITY, SPHERE_D, by_id, make_system, paper_contact
 
 R = SPHERE_D / 2
 WALLED = Box((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), (False, False, False))
@@ -59,7 +59,7 @@ def test_damping_ratio_against_direct_ode_integration(restitution):
 def head_on_restitution(restitution, steps_per_collision, phase, v=0.8):
     """Measured restitution of a head-on sphere pair whose first touch falls at ``phase`` (0-1)
     of a time step."""
-    contact = ContactModel(restitution=restitution)
+    contact = paper_contact(restitution=restitution)
     dt = contact.collision_time(DENSITY * math.pi / 6 * SPHERE_D ** 3) / steps_per_collision
     gap = v * dt * (3 + phase)
     s = make_system([[0.05, 0.05, 0.05], [0.05 + SPHERE_D + gap, 0.05, 0.05]], R,
@@ -80,7 +80,7 @@ def test_restitution_at_the_paper_time_step():
     """At the paper's dt = 1e-5 s (t_c/14 for the seed's particles) the damping calibrated for the
     discrete integrator gives the set restitution on average over touch phases, and each single
     impact within 1 %; the calibration tends to the continuous clipped-dashpot value as dt -> 0."""
-    contact = ContactModel(restitution=0.43)
+    contact = paper_contact(restitution=0.43)
     ratio = contact.collision_time(DENSITY * math.pi / 6 * SPHERE_D ** 3) / 1e-5
     assert 13 < ratio < 15
     phases = np.linspace(0, 1, 8, endpoint=False) + 1 / 16  # between the calibration's phases
@@ -94,10 +94,10 @@ def test_restitution_at_the_paper_time_step():
 def test_damping_calibration_replica_matches_the_kernels():
     """The pure-Python replica used for calibration reproduces the numba kernels' collision."""
     from fvdem.dem.contact_law import discrete_restitution
-    contact = ContactModel(restitution=0.43)
+    contact = paper_contact(restitution=0.43)
     m = DENSITY * math.pi / 6 * SPHERE_D ** 3
     dt = contact.collision_time(m) / 14
-    zeta = contact.parameters(dt, m)[2]
+    zeta = contact.parameters(dt, m)[ZETA_N]
     step = dt * math.sqrt(contact.normal_stiffness / (0.5 * m))
     for phase in (0.1, 0.6):
         assert head_on_restitution(0.43, 14, phase) == pytest.approx(discrete_restitution(zeta, step, phase),
@@ -129,7 +129,7 @@ def test_oblique_wall_impact_respects_coulomb_limit(tangential_speed):
     mu = 0.3
     vn = 0.5
     s = make_system([[0.05, 0.05, R * 1.02]], R, velocity=[[tangential_speed, 0, -vn]], box=WALLED,
-                    contact=ContactModel(friction=mu, rolling_friction=0.0))
+                    contact=paper_contact(friction=mu, rolling_friction=0.0))
     m = s.particles.mass[0]
     run_until_separated(s)
     v = by_id(s, "velocity")[0]
@@ -159,7 +159,7 @@ def test_sliding_sphere_reaches_pure_rolling_at_five_sevenths():
     mu = 0.3
     v0 = 0.5
     # settling vertically first would take long: start at the static overlap instead
-    s = _sphere_on_floor(ContactModel(friction=mu, rolling_friction=0.0), v0)
+    s = _sphere_on_floor(paper_contact(friction=mu, rolling_friction=0.0), v0)
     slide_time = 2 * v0 / (7 * mu * 9.81)  # analytical time to reach rolling
     s.step(int(1.5 * slide_time / s.dt))
     v = by_id(s, "velocity")[0, 0]
@@ -171,7 +171,7 @@ def test_sliding_sphere_reaches_pure_rolling_at_five_sevenths():
 def test_rolling_friction_decelerates_rolling_sphere():
     """Constant directional torque: a rolling sphere decelerates at 5/7 mu_r g (energy balance)."""
     mu_r = 0.05
-    contact = ContactModel(friction=0.5, rolling_friction=mu_r)
+    contact = paper_contact(friction=0.5, rolling_friction=mu_r)
     v0 = 0.3
     s = _sphere_on_floor(contact, v0, rolling=True)
     t = 0.05
@@ -239,7 +239,7 @@ def test_sphere_on_spherocylinder_collision(where):
     particles = ParticleArrays.create(np.array(pos), [r_rod, r_sph], [h, 0.0], DENSITY,
                                       axis=[[1, 0, 0], [1, 0, 0]],
                                       velocity=np.array([0.2 * approach, -0.2 * approach]))
-    contact = ContactModel(restitution=0.6, friction=0.3, rolling_friction=0.0)
+    contact = paper_contact(restitution=0.6, friction=0.3, rolling_friction=0.0)
     box = Box((0.0, 0.0, 0.0), (0.1, 0.1, 0.1), (True, True, True))
     m = particles.mass
     reduced = m[0] * m[1] / (m[0] + m[1])
@@ -260,7 +260,7 @@ def test_oblique_pair_impact_restitution_and_coulomb_limit(tangential_speed):
     sliding speeds the pair moves sideways during the contact and the normal rotates, so a fixed
     axis is no longer the normal: gross sliding is tested against a wall, whose normal is fixed.)"""
     mu, vn = 0.3, 0.4
-    contact = ContactModel(friction=mu, rolling_friction=0.0)
+    contact = paper_contact(friction=mu, rolling_friction=0.0)
     normal = np.array([1.0, 0.0, 0.0])
     s = make_system([[0.05, 0.05, 0.05], [0.05 + SPHERE_D * 1.01, 0.05, 0.05]], R,
                     velocity=[[vn / 2, tangential_speed / 2, 0], [-vn / 2, -tangential_speed / 2, 0]],
@@ -334,7 +334,7 @@ def test_a_wall_friction_of_its_own_sets_the_sliding_time_on_the_wall(mu_wall):
     """``wall_friction``: a sphere sliding on the floor reaches rolling at 5/7 v0 after 2 v0 / (7 mu_w g), the wall's
     coefficient, not the particles' (0.8 here; the particle-particle law is untouched: no pair exists)."""
     v0 = 0.5
-    s = _sphere_on_floor(ContactModel(friction=0.8, rolling_friction=0.0, wall_friction=mu_wall), v0)
+    s = _sphere_on_floor(paper_contact(friction=0.8, rolling_friction=0.0, wall_friction=mu_wall), v0)
     slide_time = 2 * v0 / (7 * mu_wall * 9.81)
     s.step(int(0.5 * slide_time / s.dt))  # half-way: still sliding, decelerated at mu_w g
     assert by_id(s, "velocity")[0, 0] == pytest.approx(v0 - mu_wall * 9.81 * 0.5 * slide_time, rel=0.02)
@@ -352,9 +352,46 @@ def test_the_wall_coefficients_default_to_the_particles_and_a_wall_rolling_frict
     v0, t = 0.3, 0.05
     ends = []
     for mu_rw in (0.05, 0.0):
-        s = _sphere_on_floor(ContactModel(friction=0.5, rolling_friction=0.3, wall_rolling_friction=mu_rw), v0,
+        s = _sphere_on_floor(paper_contact(friction=0.5, rolling_friction=0.3, wall_rolling_friction=mu_rw), v0,
                              rolling=True)
         s.step(int(t / s.dt))
         ends.append(by_id(s, "velocity")[0, 0])
     assert ends[0] == pytest.approx(v0 - 5 / 7 * 0.05 * 9.81 * t, rel=0.02)
     assert ends[1] == pytest.approx(v0, rel=1e-3)
+
+
+def test_one_set_of_contact_defaults_from_the_case_to_the_kernels():
+    """The case's [contact] defaults, ContactModel's and ``contact_law.DEFAULTS`` are one set, key by key; the
+    parameter vector the kernels take holds them at their named indices, and the constants the kernels read
+    from it (``kernel_constants``, ``wall_constants``) are those entries under their names."""
+    from dataclasses import fields
+
+    from fvdem.case.schema import ContactConfig
+    from fvdem.dem import contact_law as cl
+    case, model = ContactConfig(), ContactModel()
+    names = [f.name for f in fields(ContactModel)]
+    assert sorted(names) == sorted(cl.DEFAULTS)
+    for name in names:
+        assert getattr(case, name) == getattr(model, name) == cl.DEFAULTS[name], name
+    assert ContactModel(**{name: getattr(case, name) for name in names}) == model  # the case's keys build it
+    mass, dt = DENSITY * math.pi / 6 * SPHERE_D ** 3, 5e-5
+    p = model.parameters(dt, mass)
+    assert p.shape == (cl.PARAMETER_COUNT,)
+    k_n, defaults = cl.DEFAULTS["normal_stiffness"], cl.DEFAULTS
+    expected = {cl.K_N: k_n, cl.K_T: defaults["tangential_stiffness_ratio"] * k_n,
+                cl.ETA_T_OVER_ETA_N: defaults["tangential_damping_ratio"], cl.FRICTION: defaults["friction"],
+                cl.ROLLING_FRICTION: defaults["rolling_friction"], cl.DT: dt, cl.WALL_FRICTION: defaults["friction"],
+                cl.WALL_ROLLING_FRICTION: defaults["rolling_friction"],
+                cl.ZETA_N: cl.calibrated_damping_ratio(defaults["restitution"], dt * math.sqrt(k_n / (0.5 * mass))),
+                cl.ZETA_WALL: cl.calibrated_damping_ratio(defaults["restitution"], dt * math.sqrt(k_n / mass))}
+    assert sorted(expected) == list(range(cl.PARAMETER_COUNT))  # every entry named once
+    assert all(p[index] == value for index, value in expected.items())
+    law = cl.kernel_constants(p)
+    by_name = {cl.LAW_K_N: p[cl.K_N], cl.LAW_K_T: p[cl.K_T], cl.LAW_INV_K_T: 1.0 / p[cl.K_T],
+               cl.LAW_ETA_T_RATIO: p[cl.ETA_T_OVER_ETA_N], cl.LAW_FRICTION: p[cl.FRICTION],
+               cl.LAW_ROLLING_FRICTION: p[cl.ROLLING_FRICTION], cl.LAW_DT: dt, cl.LAW_INV_DT: 1.0 / dt}
+    assert sorted(by_name) == list(range(len(law))) and all(law[i] == value for i, value in by_name.items())
+    walls = ContactModel(wall_friction=0.1, wall_rolling_friction=0.2).parameters(dt, mass)
+    wall = cl.wall_constants(cl.kernel_constants(walls), walls)
+    assert (wall[cl.LAW_FRICTION], wall[cl.LAW_ROLLING_FRICTION]) == (0.1, 0.2)
+    assert all(wall[i] == law[i] for i in by_name if i not in (cl.LAW_FRICTION, cl.LAW_ROLLING_FRICTION))

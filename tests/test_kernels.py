@@ -1,7 +1,9 @@
-"""The compiled closures (each law of ``fvdem.coupling.laws`` through the generic loops of
-``fvdem.coupling.kernels``) against the same law run in plain Python, and against the values fvdem 0.2.0's
+"""The compiled closures (each registered law of ``fvdem.coupling.laws`` through the loops ``law_loops`` writes
+from the registry) against the same law run in plain Python, and against the values fvdem 0.2.0's
 separately written numpy and numba closures gave (``tests/data/law_values_0.2.0.npz``), to 1e-12; and the
 bridge's exchange kernels against numpy."""
+import json
+import math
 import warnings
 from pathlib import Path
 
@@ -12,6 +14,7 @@ import pytest
 from fvdem.coupling import closures, kernels
 from fvdem.coupling.bridge import particle_response
 from fvdem.coupling.interpolation import scatter
+from fvdem.coupling.laws import D_P, DRAG, MU, RHO, reynolds, slip_speed
 
 AIR = (1.2, 1.8e-5)
 WATER = (1000.0, 1.0e-3)
@@ -100,27 +103,121 @@ def test_kernel_path_warns_outside_the_fitted_range():
 
 def test_a_law_is_registered_only_compiled_for_its_kinds_signature():
     """A law is a compiled scalar function of one particle with its kind's signature (``laws.DRAG``,
-    ``laws.FORCE``): registered so, it runs through the generic loop; a plain Python function, or one
-    compiled for another signature, is refused at registration with the decorator to use."""
-    from numba import njit
-
+    ``laws.FORCE``; registered so it runs, ``test_a_law_registered_in_a_test_runs_inlined_in_the_fast_loop``);
+    a plain Python function, or one compiled for another signature, is refused at registration with the
+    decorator to use."""
     from fvdem.coupling import laws
 
-    @njit(laws.DRAG, cache=False)
-    def constant(sx, sy, sz, eps, ax, ay, az, shape):
-        return 2.0
-
-    try:
-        closures.register("drag", "constant-test")(constant)
-        particle = closures.ParticleShape(1e-3, 1e-3, *AIR)
-        assert np.all(closures.law("drag", "constant-test").evaluate(particle, np.ones((4, 3)), np.ones(4),
-                                                                     np.ones((4, 3))) == 2.0)
-    finally:
-        closures.LAWS["drag"].pop("constant-test", None)
     for wrong in (lambda particle, slip, voidage, axis: np.ones(len(slip)), laws.zastawny_lift):
         with pytest.raises(TypeError, match=r"njit\(fvdem.coupling.laws.DRAG, cache=True\)"):
             closures.register("drag", "wrong-test")(wrong)
     assert "wrong-test" not in closures.LAWS["drag"]
+
+
+@numba.njit(DRAG, cache=True, inline="always")
+def toy_drag(sx, sy, sz, eps, ax, ay, az, shape):
+    """A drag law as one adds it (``laws.py``'s form and shared pieces): Stokes drag with a Schiller-Naumann
+    factor and a voidage power [kg/s]."""
+    re = reynolds(slip_speed(sx, sy, sz), eps, shape[D_P], shape[RHO], shape[MU])
+    return 3.0 * math.pi * shape[MU] * shape[D_P] * eps ** -1.65 * (1.0 + 0.15 * re ** 0.687)
+
+
+def test_a_law_registered_in_a_test_runs_inlined_in_the_fast_loop():
+    """Registering a law is all it takes: the next evaluation writes the loops for the new registry (another
+    fingerprint, so another numba cache), the law runs there by its index, its values are its Python
+    reference's, and the registry without it finds its own loops again."""
+    before = closures.fast_loops()
+    closures.register("drag", "toy-test", summary="a test's law")(toy_drag)
+    try:
+        particle = closures.ParticleShape(3.2e-3, 12.8e-3, *AIR)
+        slip, voidage, axis = inputs()
+        law = closures.law("drag", "toy-test")
+        values = law.evaluate(particle, slip, voidage, axis)
+        loops = closures.fast_loops()
+        assert loops is not before and loops.FINGERPRINT != before.FINGERPRINT
+        k = loops.INDEX["drag"]["toy-test"]
+        assert getattr(loops, f"drag_{k}") is toy_drag and f"return drag_{k}(" in Path(loops.__file__).read_text()
+        assert loops.drag_loop.signatures  # the fast path ran it
+        assert_close(values, law.reference_values(particle, slip, voidage, axis))
+        assert np.all(values > 0)
+        assert list(loops.INDEX["drag"]) == list(closures.LAWS["drag"])
+    finally:
+        closures.LAWS["drag"].pop("toy-test", None)
+    assert closures.fast_loops() is before
+
+
+def test_the_fingerprint_follows_the_registry_and_the_laws_source_files(tmp_path, monkeypatch):
+    """The loops' module name (so numba's cache) changes with the registry's names and order and with an edit
+    of a law's source file or of a module of its package it imports, and with nothing else; it is the same in
+    another process (else every run would compile again)."""
+    import subprocess
+    import sys
+
+    from fvdem.coupling import law_loops
+    package = tmp_path / "toylaws"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "constants.py").write_text("SCALE = 2.0\n")
+    (package / "law.py").write_text("from numba import njit\nfrom fvdem.coupling.laws import DRAG\n"
+                                    "from .constants import SCALE\n\n\n@njit(DRAG)\n"
+                                    "def law(sx, sy, sz, eps, ax, ay, az, shape):\n    return SCALE * eps\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import toylaws.law
+    registry = {"drag": (("a", toylaws.law.law), ("b", closures.LAWS["drag"]["none"].scalar)), "lift": (),
+                "torque": (), "set": ()}
+    first = law_loops.fingerprint(registry)
+    assert law_loops.fingerprint(dict(registry)) == first
+    assert law_loops.fingerprint({**registry, "drag": registry["drag"][::-1]}) != first
+    assert law_loops.fingerprint({**registry, "drag": (("c", toylaws.law.law), registry["drag"][1])}) != first
+    (package / "constants.py").write_text("SCALE = 3.0\n")
+    assert law_loops.fingerprint(registry) != first
+    (package / "constants.py").write_text("SCALE = 2.0\n")
+    assert law_loops.fingerprint(registry) == first
+    here = closures.fast_loops().FINGERPRINT
+    there = subprocess.run([sys.executable, "-c", "from fvdem.coupling import closures; "
+                            "print(closures.fast_loops().FINGERPRINT)"], capture_output=True, text=True, check=True)
+    assert there.stdout.strip() == here
+
+
+def test_generated_loops_unused_for_a_while_are_removed_with_their_caches(tmp_path):
+    """When a module is written, those not used (touched) for ``STALE_DAYS`` go, with numba's and Python's caches
+    of them; the one in use and recently used ones stay."""
+    import os
+    import time
+
+    from fvdem.coupling import law_loops
+    (tmp_path / "__pycache__").mkdir()
+    names = {age: f"{law_loops.PREFIX}{age:016d}" for age in (0, 2, law_loops.STALE_DAYS + 1)}
+    for age, name in names.items():
+        for path in (tmp_path / f"{name}.py", tmp_path / "__pycache__" / f"{name}.drag_loop-46.py311.nbi"):
+            path.write_text("")
+            os.utime(path, (time.time() - age * 86400,) * 2)
+    law_loops._remove_stale(tmp_path, names[0])
+    left = {p.name.split(".")[0] for p in tmp_path.rglob("*") if p.is_file()}
+    assert left == {names[0], names[2]}
+
+
+@pytest.mark.parametrize("kind", ["drag", "lift", "torque"])
+def test_the_fast_loops_run_every_registered_law_by_its_index_and_list_what_fvdem_laws_lists(kind, capsys):
+    """The loops' index is the registry's order, which ``fvdem laws KIND`` lists; index k runs the law
+    registered under that name (its values are its Python reference's)."""
+    from fvdem.cli import main
+    assert main(["laws", kind, "--json"]) == 0
+    listed = list(json.loads(capsys.readouterr().out)[kind])
+    loops = closures.fast_loops()
+    assert list(loops.INDEX[kind]) == listed == list(closures.LAWS[kind])
+    particle = closures.ParticleShape(3.2e-3, 12.8e-3, *AIR)
+    slip, voidage, axis = closures.kernel_inputs(*inputs(n=200))
+    shape = particle.kernel_args
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # range warnings of the dense laws
+        for name, k in loops.INDEX[kind].items():
+            law = closures.LAWS[kind][name]
+            assert getattr(loops, f"{kind}_{k}") is law.scalar
+            out = np.empty(len(slip)) if kind == "drag" else np.empty((len(slip), 3))
+            getattr(loops, f"{kind}_loop")(k, slip, voidage, axis, shape, out)
+            expected = law.reference_values(particle, slip, voidage, axis)
+            assert_close(out, np.zeros_like(out) if expected is None else expected)
 
 
 def grid_weights(n, cells, width, seed=5):
@@ -253,22 +350,3 @@ def test_column_sums_equal_numpy_on_any_thread_count(n):
     np.testing.assert_allclose(results[0], values.sum(axis=0), rtol=0, atol=1e-12 * np.abs(values).sum())
     for other in results[1:]:
         assert np.array_equal(other, results[0])
-
-
-@pytest.mark.parametrize("kind", ["drag", "force"])
-def test_the_builtin_loops_run_the_law_their_index_names(kind):
-    """``kernels._drag`` / ``_force`` dispatch index k to ``DRAG_LAWS[k]`` / ``FORCE_LAWS[k]``: the loop with
-    the law inlined gives what the first-class loop gives with the law itself, for every built-in law."""
-    particle = closures.ParticleShape(3.2e-3, 12.8e-3, *AIR)
-    slip, voidage, axis = closures.kernel_inputs(*inputs(n=200))
-    shape = particle.kernel_args
-    table = kernels.DRAG_LAWS if kind == "drag" else kernels.FORCE_LAWS
-    for k, law in enumerate(table):
-        inlined = np.empty(len(slip)) if kind == "drag" else np.empty((len(slip), 3))
-        generic = np.empty_like(inlined)
-        (kernels.builtin_drag_loop if kind == "drag" else kernels.builtin_force_loop)(k, slip, voidage, axis, shape,
-                                                                                       inlined)
-        (kernels.drag_loop if kind == "drag" else kernels.force_loop)(law, slip, voidage, axis, shape, generic)
-        assert_close(inlined, generic)
-    registered = {l.scalar for kind_laws in closures.LAWS.values() for l in kind_laws.values()}
-    assert set(table) <= registered

@@ -5,7 +5,7 @@ import pytest
 from fvdem.dem.geometry import segment_distance
 from fvdem.dem.system import SKIN_RANGE, SKIN_TARGET_INTERVAL, Box, ContactModel, adapted_skin
 
-from conftest import by_id, make_system
+from conftest import by_id, make_system, paper_contact
 
 
 def _listed_pairs(system):
@@ -92,7 +92,7 @@ def _sliding_pair(skin):
     """A sphere pressed on another and dragged sideways: a long-lived sliding/sticking contact."""
     d = 4e-3
     s = make_system([[0.05, 0.05, 0.05], [0.05, 0.05, 0.05 + d - 1e-7]], d / 2, velocity=[[0, 0, 0], [0.02, 0.01, 0]],
-                    contact=ContactModel(friction=0.5, rolling_friction=0.1), dt=2e-6, skin=skin)
+                    contact=paper_contact(friction=0.5, rolling_friction=0.1), dt=2e-6, skin=skin)
     s.rebuild()
     s.compute_forces()
     return s

@@ -47,7 +47,7 @@ RHO, MU = 1.2, 1.568e-5
 
 # --------------------------------------------------------------------------- DEM step vs collision time
 def dem_map(divisors):
-    contact = ContactModel()
+    contact = ContactModel(normal_stiffness=2.0e4)  # the seed's spring (Mema et al. (2020) Table 5)
     d = 5.3e-3
     points = []
     for n in divisors:

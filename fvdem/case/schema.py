@@ -10,7 +10,7 @@ from ..coupling.closures import describe_laws, law_names
 from ..coupling.stochastic import describe_stochastic_forces, stochastic_force_names
 from ..coupling.voidage import describe_voidage, voidage_names
 from ..dem.backends import backend_names, describe_backends
-from ..dem.contact_law import collision_time
+from ..dem.contact_law import DEFAULTS as CONTACT, collision_time
 from ..dem.particles import spherocylinder_volume, volume_equivalent_diameter
 
 
@@ -128,19 +128,20 @@ class ParticlesConfig:
 
 
 @dataclass(frozen=True)
-class ContactConfig:
-    normal_stiffness: float = spec(800.0, unit="stiffness", gt=0.0,
+class ContactConfig:  # the defaults: fvdem.dem.contact_law.DEFAULTS (ContactModel's too)
+    normal_stiffness: float = spec(CONTACT["normal_stiffness"], unit="stiffness", gt=0.0,
                                    doc="linear normal spring k_n [N/m] (default from the speed-accuracy front, "
                                        "docs/speed-accuracy.md; Mema et al. (2020): 2e4 with dem_step 1e-5)")
-    restitution: float = spec(0.43, gt=0.0, le=1.0, doc="coefficient of restitution e in (0, 1]")
-    friction: float = spec(0.46, ge=0.0, doc="sliding friction coefficient mu")
-    rolling_friction: float = spec(0.46, ge=0.0, doc="rolling friction coefficient mu_r (CDT model)")
-    wall_friction: float | None = spec(None, ge=0.0, optional=True,
+    restitution: float = spec(CONTACT["restitution"], gt=0.0, le=1.0, doc="coefficient of restitution e in (0, 1]")
+    friction: float = spec(CONTACT["friction"], ge=0.0, doc="sliding friction coefficient mu")
+    rolling_friction: float = spec(CONTACT["rolling_friction"], ge=0.0,
+                                   doc="rolling friction coefficient mu_r (CDT model)")
+    wall_friction: float | None = spec(CONTACT["wall_friction"], ge=0.0, optional=True,
                                        doc="particle-wall sliding friction (default: friction, as particle-particle)")
-    wall_rolling_friction: float | None = spec(None, ge=0.0, optional=True,
+    wall_rolling_friction: float | None = spec(CONTACT["wall_rolling_friction"], ge=0.0, optional=True,
                                                doc="particle-wall rolling friction (default: rolling_friction)")
-    tangential_stiffness_ratio: float = spec(2.0 / 7.0, gt=0.0, doc="k_t / k_n")
-    tangential_damping_ratio: float = spec(1.0, ge=0.0, doc="eta_t / eta_n")
+    tangential_stiffness_ratio: float = spec(CONTACT["tangential_stiffness_ratio"], gt=0.0, doc="k_t / k_n")
+    tangential_damping_ratio: float = spec(CONTACT["tangential_damping_ratio"], ge=0.0, doc="eta_t / eta_n")
     neighbour_skin: float | None = spec(None, unit="length", gt=0.0, optional=True,
                                         doc="neighbour-list skin [m], fixed (default: adapted at each rebuild to keep "
                                             "about 8 DEM steps between rebuilds, from 0.1 to 1 diameter)")

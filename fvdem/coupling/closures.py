@@ -6,12 +6,13 @@ formula, validity and reference (the flagged choices on the ambiguous points are
 
 - ``LAWS`` / ``register`` / ``law``: the registry the case checks, ``fvdem schema`` and the bridge read.
   A law is registered with its name, the shapes it is for, the aspect ratio its coefficients were fitted
-  for, its validity, reference and fitted (Re, solids fraction) range.
-- ``Law.evaluate``: a law at N particles through the compiled loop of its kind (``kernels``), warning
-  once when used outside its fitted range;
-  ``Law.reference``: the same law's ``py_func`` particle by particle in plain Python, what
-  tests/test_kernels.py holds the compiled path to (1e-12). ``evaluate_set``: a drag, lift and torque law
-  together (in one pass where they share work, ``kernels.SETS``).
+  for, its validity, reference and fitted (Re, solids fraction) range. ``SETS`` / ``register_set``: a drag,
+  lift and torque law evaluated together in one pass where they share work.
+- ``Law.evaluate``: a law at N particles through the compiled loop of its kind, which ``law_loops`` writes
+  from the registry with every registered law inlined (``fast_loops``), warning once when used outside its
+  fitted range; ``Law.reference_values``: the same law's ``py_func`` particle by particle in plain Python,
+  what tests/test_kernels.py holds the compiled path to (1e-12). ``evaluate_set``: a drag, lift and torque
+  law together (in one pass where a set is registered for them).
 - numpy forms (``single_particle_drag_coefficient``, ``multi_particle_lift``, ``sphericities``, ...):
   the scalar functions of ``laws.py`` applied elementwise, for tools, tests and the analysis.
 
@@ -28,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..correlations import ergun_beta_per_solids  # noqa: F401  (also fvdem.coupling.closures.ergun_beta_per_solids)
-from . import kernels, laws
+from . import kernels, law_loops, laws
 from .coefficients import (GIDASPOW_SWITCH, SANJEEVI_PADDING_DRAG, SANJEEVI_PADDING_TORQUE,  # noqa: F401  (re-exported)
                            Z_LIFT, Z_TORQUE, ZASTAWNY_LIFT, ZASTAWNY_TORQUE)
 
@@ -157,23 +158,20 @@ def _fluid_shape(d_p, rho, mu):
     return laws.shape_vector(float(d_p), float(d_p), float(rho), float(mu))
 
 
-def _at_particles(function, kind, slip, voidage, axis, shape):
-    """``function`` (a law of ``laws.py`` of this kind) at every particle: by index through the loop with the
-    law inlined when it is a built-in law, else through the first-class loop."""
+def _at_particles(registered, slip, voidage, axis, shape):
+    """The registered law ``registered`` (a ``Law``) at every particle, by its index through its kind's loop
+    (``fast_loops``)."""
     slip, voidage, axis = kernel_inputs(slip, voidage, axis)
-    out = np.empty(len(slip)) if kind == "drag" else np.empty((len(slip), 3))
-    builtin = kernels.DRAG_LAWS if kind == "drag" else kernels.FORCE_LAWS
-    if function in builtin:
-        loop = kernels.builtin_drag_loop if kind == "drag" else kernels.builtin_force_loop
-        loop(builtin.index(function), slip, voidage, axis, shape, out)
-    else:
-        (kernels.drag_loop if kind == "drag" else kernels.force_loop)(function, slip, voidage, axis, shape, out)
+    out = np.empty(len(slip)) if registered.kind == "drag" else np.empty((len(slip), 3))
+    loops = fast_loops()
+    getattr(loops, f"{registered.kind}_loop")(loops.INDEX[registered.kind][registered.name], slip, voidage, axis,
+                                              shape, out)
     return out
 
 
 def multi_particle_drag_coefficient(slip, voidage, axis, d_p, rho, mu):
     """Drag coefficient ``c`` [kg/s] (N,) of Sanjeevi & Padding 2020 (``laws.sanjeevi_padding_drag``)."""
-    return _at_particles(laws.sanjeevi_padding_drag, "drag", slip, voidage, axis, _fluid_shape(d_p, rho, mu))
+    return _at_particles(law("drag", "sanjeevi-padding"), slip, voidage, axis, _fluid_shape(d_p, rho, mu))
 
 
 def multi_particle_drag(slip, voidage, axis, d_p, rho, mu):
@@ -184,22 +182,22 @@ def multi_particle_drag(slip, voidage, axis, d_p, rho, mu):
 
 def single_particle_lift(slip, voidage, axis, d_p, rho, mu):
     """Lift force [N] (N, 3) of Zastawny's form (``laws.zastawny_lift``, Eqs. 22-24)."""
-    return _at_particles(laws.zastawny_lift, "lift", slip, voidage, axis, _fluid_shape(d_p, rho, mu))
+    return _at_particles(law("lift", "zastawny"), slip, voidage, axis, _fluid_shape(d_p, rho, mu))
 
 
 def single_particle_torque(slip, voidage, axis, d_p, rho, mu):
     """Torque [N m] (N, 3) of Zastawny's form (``laws.zastawny_torque``, Eqs. 27-29)."""
-    return _at_particles(laws.zastawny_torque, "torque", slip, voidage, axis, _fluid_shape(d_p, rho, mu))
+    return _at_particles(law("torque", "zastawny"), slip, voidage, axis, _fluid_shape(d_p, rho, mu))
 
 
 def multi_particle_lift(slip, voidage, axis, d_p, rho, mu):
     """Lift force [N] (N, 3) of Sanjeevi & Padding 2020 (``laws.sanjeevi_padding_lift``, Eqs. 25-26)."""
-    return _at_particles(laws.sanjeevi_padding_lift, "lift", slip, voidage, axis, _fluid_shape(d_p, rho, mu))
+    return _at_particles(law("lift", "sanjeevi-padding"), slip, voidage, axis, _fluid_shape(d_p, rho, mu))
 
 
 def multi_particle_torque(slip, voidage, axis, d_p, rho, mu):
     """Torque [N m] (N, 3) of Sanjeevi & Padding 2020 (``laws.sanjeevi_padding_torque``, Eqs. 30-33)."""
-    return _at_particles(laws.sanjeevi_padding_torque, "torque", slip, voidage, axis, _fluid_shape(d_p, rho, mu))
+    return _at_particles(law("torque", "sanjeevi-padding"), slip, voidage, axis, _fluid_shape(d_p, rho, mu))
 
 
 def non_spherical_factor(particle, slip, voidage, axis):
@@ -298,7 +296,7 @@ class Law:
             return None
         slip, voidage, axis = kernel_inputs(slip, voidage, axis)
         shape = particle.kernel_args
-        out = _at_particles(self.scalar, self.kind, slip, voidage, axis, shape)
+        out = _at_particles(self, slip, voidage, axis, shape)
         self.warn_if_outside(slip, voidage, shape)
         return out
 
@@ -347,20 +345,69 @@ def register(kind, name, *, shapes=("sphere", "spherocylinder"), aspect_ratio=No
     return decorate
 
 
+@dataclass(frozen=True)
+class LawSet:
+    """A drag, lift and torque law evaluated together: ``function`` returns one particle's ``(c, lift x, y, z,
+    torque x, y, z)`` (``laws.sanjeevi_padding_set``), the same numbers as the three laws one by one."""
+
+    laws: tuple  # (drag, lift, torque), the registered Law objects
+    function: object
+    shapes: tuple
+
+    @property
+    def name(self) -> str:
+        return "/".join(registered.name for registered in self.laws)
+
+
+SETS: dict[tuple, LawSet] = {}  # (drag, lift, torque) Law objects -> their set
+
+
+def register_set(drag: str, lift: str, torque: str, *, shapes=("sphere", "spherocylinder")):
+    """Decorator: register ``function`` (compiled, ``@numba.njit(cache=True, inline="always")``, of a particle's
+    ``(sx, sy, sz, eps, ax, ay, az, shape)`` returning ``(c, lift x, y, z, torque x, y, z)``) as the set of the
+    registered laws ``drag``, ``lift`` and ``torque``, evaluated in one pass for ``shapes``."""
+    def decorate(function):
+        members = (law("drag", drag), law("lift", lift), law("torque", torque))
+        SETS[members] = LawSet(members, function, tuple(shapes))
+        return function
+    return decorate
+
+
+def fast_loops():
+    """The loops of every registered law and set (``law_loops``: one module per registry, laws inlined by
+    index, ``INDEX[kind][name]``), written and imported the first time a registry is used."""
+    snapshot = (tuple(LAWS["drag"].values()), tuple(LAWS["lift"].values()), tuple(LAWS["torque"].values()),
+                tuple(SETS.values()))
+    if _LATEST and _LATEST[0] == snapshot:  # the same objects: compared by identity, about a microsecond
+        return _LATEST[1]
+    registry = {kind: tuple((name, registered.scalar) for name, registered in LAWS[kind].items())
+                for kind in ("drag", "lift", "torque")}
+    registry["set"] = tuple((s.name, s.function) for s in SETS.values())
+    key = tuple(registry.items())
+    if key not in _FAST_LOOPS:
+        _FAST_LOOPS[key] = law_loops.build(registry)
+    _LATEST[:] = [snapshot, _FAST_LOOPS[key]]
+    return _LATEST[1]
+
+
+_FAST_LOOPS: dict = {}  # registry -> its loops' module
+_LATEST: list = []  # the last registry's snapshot and loops
+
+
 def evaluate_set(particle: ParticleShape, drag: str, lift: str, torque: str, slip, voidage, axis):
     """Drag coefficients, lift and torque (None where the law is 'none') of a set of laws: in one pass over
-    the particles where the set shares its work (``kernels.SETS``: the same numbers as the laws one by
-    one), else law by law (``Law.evaluate``)."""
-    index = kernels.SETS.get((drag, lift, torque))
-    if index is None or particle.is_sphere:  # the sets are of spherocylinders' laws
-        return (law("drag", drag).evaluate(particle, slip, voidage, axis),
-                law("lift", lift).evaluate(particle, slip, voidage, axis),
-                law("torque", torque).evaluate(particle, slip, voidage, axis))
+    the particles where a set is registered for them and the particle's shape (``SETS``: the same numbers as
+    the laws one by one), else law by law (``Law.evaluate``)."""
+    members = (law("drag", drag), law("lift", lift), law("torque", torque))
+    found = SETS.get(members)
+    if found is None or ("sphere" if particle.is_sphere else "spherocylinder") not in found.shapes:
+        return tuple(registered.evaluate(particle, slip, voidage, axis) for registered in members)
     slip, voidage, axis = kernel_inputs(slip, voidage, axis)
     n, shape = len(slip), particle.kernel_args
     c, lift_out, torque_out = np.empty(n), np.empty((n, 3)), np.empty((n, 3))
-    kernels.builtin_set_loop(index, slip, voidage, axis, shape, c, lift_out, torque_out)
-    law("drag", drag).warn_if_outside(slip, voidage, shape)
+    loops = fast_loops()
+    loops.set_loop(loops.INDEX["set"][found.name], slip, voidage, axis, shape, c, lift_out, torque_out)
+    members[0].warn_if_outside(slip, voidage, shape)
     return c, lift_out, torque_out
 
 
@@ -422,3 +469,8 @@ for _kind, _single, _multi in (("lift", laws.zastawny_lift, laws.sanjeevi_paddin
              validity="Re 0.1-1000, solids fraction 0-0.35 (fitted), aspect ratio 4",
              reference="Sanjeevi & Padding (2020), AIChE J. 66",
              summary="Sanjeevi-Padding 2020 (multi-particle, AR-4)")(_multi)
+
+# sets of laws that share their work, evaluated in one pass (the same numbers as the laws one by one)
+register_set("sanjeevi-padding", "sanjeevi-padding", "sanjeevi-padding", shapes=("spherocylinder",))(
+    laws.sanjeevi_padding_set)
+register_set("hoelzer-sommerfeld", "zastawny", "zastawny", shapes=("spherocylinder",))(laws.single_particle_set)

@@ -1,17 +1,9 @@
 """The coupling's compiled per-particle loops (the bridge's fast path).
 
-**The closures.** Every law of ``laws.py`` runs through a loop of its kind over the particles, one
-particle's whole evaluation per iteration, in parallel: ``drag_loop`` writes drag coefficients ``c``
-[kg/s] (N,), ``force_loop`` a lift [N] or torque [N m] (N, 3). These take the law as an argument (a
-first-class function of the kind's signature, ``laws.DRAG`` or ``laws.FORCE``), so one compiled loop in
-numba's cache runs any law, also one registered at run time. The built-in laws (``DRAG_LAWS``,
-``FORCE_LAWS``) run through ``builtin_drag_loop`` / ``builtin_force_loop`` instead, by their index, with
-the law inlined into the loop: a call through a function argument cannot be inlined and cost the laws
-1.6-2.5 times as much. ``builtin_set_loop`` evaluates a set of laws that share their work in one pass
-(``SETS``: Sanjeevi & Padding's drag, lift and torque; Hoelzer-Sommerfeld with Zastawny's lift and
-torque). Inputs: slip (N, 3), voidage (N,), axis (N, 3),
-C-contiguous float64, and the shape vector (``laws.shape_vector``, ``closures.ParticleShape.kernel_args``);
-``reynolds_loop`` gives the slip Reynolds numbers for the range warnings.
+**The closures** run through loops that ``law_loops`` writes from the registry (``closures.fast_loops``),
+each registered law inlined by its index; here is ``reynolds_loop``, the slip Reynolds numbers for their
+range warnings. Inputs: slip (N, 3), voidage (N,), axis (N, 3), C-contiguous float64, and the shape vector
+(``laws.shape_vector``, ``closures.ParticleShape.kernel_args``).
 
 Also here: the semi-implicit exchange of the bridge (``exchange_terms``: the particle response, the
 gas coefficient and source, deposited with the interpolation weights in one race-free pass) and the
@@ -23,108 +15,14 @@ import math
 
 import numba
 import numpy as np
-from numba import float64, njit, types, void
+from numba import njit
 
 from ..dem.particles import spherocylinder_volume
 from .interpolation import scatter_blocks
-from . import laws
-from .laws import D_P, DRAG, FORCE, MU, RHO, SHAPE, reynolds, slip_speed
-
-_ROWS, _VALUES = float64[:, ::1], float64[::1]
-DRAG_LAW, FORCE_LAW = types.FunctionType(DRAG), types.FunctionType(FORCE)
+from .laws import D_P, MU, RHO, reynolds, slip_speed
 
 
-# --------------------------------------------------------------------------- the closures' loops
-@njit(void(DRAG_LAW, _ROWS, _VALUES, _ROWS, SHAPE, _VALUES), cache=True, parallel=True)
-def drag_loop(law, slip, voidage, axis, shape, out):
-    """``out[i] = law(particle i)``: drag coefficients [kg/s]."""
-    for i in numba.prange(slip.shape[0]):
-        out[i] = law(slip[i, 0], slip[i, 1], slip[i, 2], voidage[i], axis[i, 0], axis[i, 1], axis[i, 2], shape)
-
-
-@njit(void(FORCE_LAW, _ROWS, _VALUES, _ROWS, SHAPE, _ROWS), cache=True, parallel=True)
-def force_loop(law, slip, voidage, axis, shape, out):
-    """``out[i] = law(particle i)``: lift forces [N] or torques [N m]."""
-    for i in numba.prange(slip.shape[0]):
-        out[i, 0], out[i, 1], out[i, 2] = law(slip[i, 0], slip[i, 1], slip[i, 2], voidage[i], axis[i, 0], axis[i, 1],
-                                              axis[i, 2], shape)
-
-
-# The built-in laws, also run by index through loops that numba compiles with every law inlined (the fast
-# path). ``closures.register`` gives each of these its index; a law registered at run time runs through the
-# first-class loops above. ``_drag`` and ``_force`` list them in this order (tests/test_kernels.py checks).
-DRAG_LAWS = (laws.hoelzer_sommerfeld_drag, laws.sanjeevi_padding_drag, laws.gidaspow_drag, laws.beetstra_drag,
-             laws.tenneti_drag, laws.tang_drag, laws.no_drag)
-FORCE_LAWS = (laws.zastawny_lift, laws.zastawny_torque, laws.sanjeevi_padding_lift, laws.sanjeevi_padding_torque,
-              laws.no_force)
-
-
-@njit(cache=True, inline="always")
-def _drag(k, sx, sy, sz, eps, ax, ay, az, shape):
-    if k == 0:
-        return laws.hoelzer_sommerfeld_drag(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 1:
-        return laws.sanjeevi_padding_drag(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 2:
-        return laws.gidaspow_drag(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 3:
-        return laws.beetstra_drag(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 4:
-        return laws.tenneti_drag(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 5:
-        return laws.tang_drag(sx, sy, sz, eps, ax, ay, az, shape)
-    return laws.no_drag(sx, sy, sz, eps, ax, ay, az, shape)
-
-
-@njit(cache=True, inline="always")
-def _force(k, sx, sy, sz, eps, ax, ay, az, shape):
-    if k == 0:
-        return laws.zastawny_lift(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 1:
-        return laws.zastawny_torque(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 2:
-        return laws.sanjeevi_padding_lift(sx, sy, sz, eps, ax, ay, az, shape)
-    if k == 3:
-        return laws.sanjeevi_padding_torque(sx, sy, sz, eps, ax, ay, az, shape)
-    return laws.no_force(sx, sy, sz, eps, ax, ay, az, shape)
-
-
-@njit(cache=True, parallel=True)
-def builtin_drag_loop(k, slip, voidage, axis, shape, out):
-    """``drag_loop`` of the built-in drag law ``DRAG_LAWS[k]``."""
-    for i in numba.prange(slip.shape[0]):
-        out[i] = _drag(k, slip[i, 0], slip[i, 1], slip[i, 2], voidage[i], axis[i, 0], axis[i, 1], axis[i, 2], shape)
-
-
-@njit(cache=True, parallel=True)
-def builtin_force_loop(k, slip, voidage, axis, shape, out):
-    """``force_loop`` of the built-in lift or torque law ``FORCE_LAWS[k]``."""
-    for i in numba.prange(slip.shape[0]):
-        out[i, 0], out[i, 1], out[i, 2] = _force(k, slip[i, 0], slip[i, 1], slip[i, 2], voidage[i], axis[i, 0],
-                                                 axis[i, 1], axis[i, 2], shape)
-
-
-# sets of built-in laws evaluated together (``laws.sanjeevi_padding_set``): (drag, lift, torque) names -> index
-SETS = {("sanjeevi-padding", "sanjeevi-padding", "sanjeevi-padding"): 0,
-        ("hoelzer-sommerfeld", "zastawny", "zastawny"): 1}  # the second for spherocylinders only
-
-
-@njit(cache=True, inline="always")
-def _set(k, sx, sy, sz, eps, ax, ay, az, shape):
-    if k == 0:
-        return laws.sanjeevi_padding_set(sx, sy, sz, eps, ax, ay, az, shape)
-    return laws.single_particle_set(sx, sy, sz, eps, ax, ay, az, shape)
-
-
-@njit(cache=True, parallel=True)
-def builtin_set_loop(k, slip, voidage, axis, shape, c_out, lift_out, torque_out):
-    """The set of built-in laws ``SETS`` index ``k`` in one pass (drag coefficients, lift, torque)."""
-    for i in numba.prange(slip.shape[0]):
-        (c_out[i], lift_out[i, 0], lift_out[i, 1], lift_out[i, 2], torque_out[i, 0], torque_out[i, 1],
-         torque_out[i, 2]) = _set(k, slip[i, 0], slip[i, 1], slip[i, 2], voidage[i], axis[i, 0], axis[i, 1],
-                                  axis[i, 2], shape)
-
-
+# --------------------------------------------------------------------------- the closures' range warnings
 @njit(cache=True, parallel=True)
 def reynolds_loop(slip, voidage, shape, out):
     """Superficial slip Reynolds numbers (floored, ``laws.reynolds``), for the validity-range warnings."""

@@ -6,12 +6,11 @@ A **law** takes one particle's slip ``(sx, sy, sz)`` (gas interstitial velocity 
 cylinder diameter and total length [m], volume-equivalent diameter [m], fluid density [kg/m^3] and
 viscosity [Pa s], and the spherocylinder's constants of ``shape_constants``) and returns the drag coefficient
 ``c`` [kg/s] with ``F_D = c u`` (``DRAG``), or the lift force [N] / the hydrodynamic torque [N m] as a
-3-tuple (``FORCE``). Each law is compiled for exactly that signature, so that the loops of
-``kernels.py`` run any of them (the built-in ones inlined by index, one registered at run time as a
-first-class function). The registry (``closures.LAWS``) names them; the numpy functions of ``closures``
-are these same functions applied per particle; their ``py_func`` is the reference the tests run in plain
-Python. ``sanjeevi_padding_set`` and ``single_particle_set`` are compositions: a set of three laws from
-the same pieces, their shared state computed once.
+3-tuple (``FORCE``). Each law is compiled for exactly that signature. The registry (``closures.LAWS``)
+names them, and the loops over the particles are written from it (``law_loops``), each law inlined by its
+index; the numpy functions of ``closures`` are these same functions applied per particle; their ``py_func``
+is the reference the tests run in plain Python. ``sanjeevi_padding_set`` and ``single_particle_set`` are
+compositions (``closures.SETS``): a set of three laws from the same pieces, their shared state computed once.
 
 The pieces the laws share (the slip Reynolds number, the incidence, the sphericities, C_D of Hoelzer &
 Sommerfeld, Sanjeevi & Padding's F(Re, eps_s), Zastawny's form, the lift and torque directions) are

@@ -43,15 +43,35 @@ exceed ``mu`` times the normal impulse (by 9 % for e = 0.43). Clipped, ``J_t <= 
 from __future__ import annotations
 
 import math
-
-HISTORY_COLUMNS = 4  # tangential displacement (3) and the "contact exists" flag
+from types import MappingProxyType
 
 import numpy as np
 from numba import njit
 
-# indices into the contact parameter vector passed to kernels
+HISTORY_COLUMNS = 4  # tangential displacement (3) and the "contact exists" flag
+
+# The contact law's default parameters, written once: the case's [contact] keys (fvdem.case.schema.ContactConfig,
+# which adds their units, ranges and docs) and ``system.ContactModel`` take their defaults from here
+# (tests/test_contact_law.py holds the three equal). The stiffness is the speed-accuracy front's
+# (docs/speed-accuracy.md); Mema et al. (2020) Table 5 has 2e4 N/m with a DEM step of 1e-5 s.
+DEFAULTS = MappingProxyType({
+    "normal_stiffness": 800.0,  # k_n [N/m]
+    "restitution": 0.43,  # e
+    "friction": 0.46,  # mu
+    "rolling_friction": 0.46,  # mu_r
+    "tangential_stiffness_ratio": 2.0 / 7.0,  # k_t / k_n
+    "tangential_damping_ratio": 1.0,  # eta_t / eta_n
+    "wall_friction": None,  # particle-wall mu (None: the particles' friction)
+    "wall_rolling_friction": None,  # particle-wall mu_r (None: the particles' rolling_friction)
+})
+
+# The parameter vector kernels take (``contact_parameters``): its entries by name
 K_N, K_T, ZETA_N, ETA_T_OVER_ETA_N, FRICTION, ROLLING_FRICTION, DT, ZETA_WALL, WALL_FRICTION, WALL_ROLLING_FRICTION = \
     range(10)
+PARAMETER_COUNT = 10
+# The constants a kernel reads once from that vector (``kernel_constants``, the ``law`` tuple of
+# ``contact_force``): its entries by name
+LAW_K_N, LAW_K_T, LAW_INV_K_T, LAW_ETA_T_RATIO, LAW_FRICTION, LAW_ROLLING_FRICTION, LAW_DT, LAW_INV_DT = range(8)
 
 
 def _collision_in_units_of_w0(zeta: float):
@@ -162,7 +182,7 @@ def contact_parameters(normal_stiffness, tangential_stiffness, restitution, tang
     """Pack the contact law's parameters into the float vector that kernels take. The damping
     ratios are calibrated for particles of ``mass`` [kg] at time step ``dt`` [s]. ``wall_friction`` and
     ``wall_rolling_friction``: the particle-wall coefficients (None: the particle-particle ones)."""
-    p = np.zeros(10)
+    p = np.zeros(PARAMETER_COUNT)
     p[K_N] = normal_stiffness
     p[K_T] = tangential_stiffness
     p[ZETA_N] = calibrated_damping_ratio(restitution, dt * math.sqrt(normal_stiffness / (0.5 * mass)))
@@ -192,9 +212,17 @@ def normal_damping(zeta, reduced_mass, k_n):
 def kernel_constants(params):
     """The parameter vector as scalars, read once before a kernel's loops rather than once per contact
     (numba cannot keep an array's values in registers across stores to other arrays, which might
-    alias it): ``(k_n, k_t, 1/k_t, eta_t/eta_n, mu, mu_r, dt, 1/dt)``."""
+    alias it): ``(k_n, k_t, 1/k_t, eta_t/eta_n, mu, mu_r, dt, 1/dt)``, in the order of the ``LAW_*`` indices."""
     return (params[K_N], params[K_T], 1.0 / params[K_T], params[ETA_T_OVER_ETA_N], params[FRICTION],
             params[ROLLING_FRICTION], params[DT], 1.0 / params[DT])
+
+
+@njit(cache=True, inline="always")
+def wall_constants(law, params):
+    """The particle-wall law's constants: the pair constants ``law`` (``kernel_constants``) with the walls'
+    sliding and rolling friction of ``params``."""
+    return (law[LAW_K_N], law[LAW_K_T], law[LAW_INV_K_T], law[LAW_ETA_T_RATIO], params[WALL_FRICTION],
+            params[WALL_ROLLING_FRICTION], law[LAW_DT], law[LAW_INV_DT])
 
 
 @njit(cache=True, inline="always")
@@ -268,7 +296,8 @@ def contact_force(history, row, delta, nx, ny, nz, vx, vy, vz, wx, wy, wz,
     constants of ``kernel_constants``. Returns ``(fx, fy, fz, tx, ty, tz, f_n)`` with ``f_n >= 0``
     the normal force magnitude.
     """
-    k_n, k_t, inv_k_t, eta_t_ratio, mu, mu_r, dt, inv_dt = law
+    k_n, k_t, inv_k_t, eta_t_ratio = law[LAW_K_N], law[LAW_K_T], law[LAW_INV_K_T], law[LAW_ETA_T_RATIO]
+    mu, mu_r, dt, inv_dt = law[LAW_FRICTION], law[LAW_ROLLING_FRICTION], law[LAW_DT], law[LAW_INV_DT]
     v_n = vx * nx + vy * ny + vz * nz
     onset = 1.0
     if history[row, 3] == 0.0:  # first step of this contact

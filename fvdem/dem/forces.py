@@ -32,8 +32,7 @@ import math
 
 from numba import njit, prange
 
-from .contact_law import (WALL_FRICTION, WALL_ROLLING_FRICTION, ZETA_N, ZETA_WALL, contact_force,
-                          kernel_constants, normal_damping)
+from .contact_law import LAW_K_N, ZETA_N, ZETA_WALL, contact_force, kernel_constants, normal_damping, wall_constants
 from .geometry import cross, minimum_image, segment_parameters
 
 # fast-math without 'nnan'/'ninf': FMA contraction, reciprocals, reassociation; NaN and Inf still
@@ -81,7 +80,7 @@ def _pair_constants(i, j, ri, rj, mass, inertia, params, law, same, uniform, sph
         return uniform
     ii = inertia[i, 0] if spheres else min(inertia[i, 0], inertia[i, 1])
     ij = inertia[j, 0] if spheres else min(inertia[j, 0], inertia[j, 1])
-    return (normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[0]), ri * rj / (ri + rj),
+    return (normal_damping(params[ZETA_N], mass[i] * mass[j] / (mass[i] + mass[j]), law[LAW_K_N]), ri * rj / (ri + rj),
             ii * ij / (ii + ij))
 
 
@@ -248,8 +247,7 @@ def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_l
         return fx, fy, fz, tx, ty, tz, max_overlap, wall_contacts
     n_ends = 2 if h > 0.0 else 1
     imin = min(inertia[i, 0], inertia[i, 1])
-    # the particle-wall law: the pair law with the walls' sliding and rolling friction
-    wall_law = (law[0], law[1], law[2], law[3], params[WALL_FRICTION], params[WALL_ROLLING_FRICTION], law[6], law[7])
+    wall_law = wall_constants(law, params)  # the pair law with the walls' sliding and rolling friction
     for face in range(6):
         if not wall_active[face]:
             continue
@@ -294,7 +292,7 @@ def _wall_contacts(i, position, velocity, angular_velocity, axis, radius, half_l
             wfx, wfy, wfz, trx, tr_y, trz, f_n = contact_force(
                 wall_history, slot, overlap, nx, ny, nz, vx, vy, vz,
                 angular_velocity[i, 0], angular_velocity[i, 1], angular_velocity[i, 2],
-                normal_damping(params[ZETA_WALL], mass[i], law[0]), r, imin, wall_law)
+                normal_damping(params[ZETA_WALL], mass[i], law[LAW_K_N]), r, imin, wall_law)
             fx += wfx
             fy += wfy
             fz += wfz

@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import SimulationError  # noqa: F401  (re-exported: fvdem.dem.system.SimulationError)
 from ..timing import Timings
 
-from .contact_law import HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
+from .contact_law import DEFAULTS, HISTORY_COLUMNS, K_N, ZETA_N, collision_time, contact_parameters, normal_damping
 from .forces import contact_forces
 from .integrate import kick, kick_drift
 from .neighbours import (build_half_list, carry_history, cell_indices, cell_starts, compact_rows, contact_blocks,
@@ -80,16 +80,17 @@ class Box:
 
 @dataclass(frozen=True)
 class ContactModel:
-    """Contact law parameters (SI). ``tangential_stiffness`` [N/m] defaults to 2/7 of the normal."""
+    """Contact law parameters (SI; the case's [contact] keys of the same names, ``docs/case-reference.md``).
+    The defaults are the case's, ``contact_law.DEFAULTS``."""
 
-    normal_stiffness: float = 2.0e4
-    restitution: float = 0.43
-    friction: float = 0.46
-    rolling_friction: float = 0.46
-    tangential_stiffness_ratio: float = 2.0 / 7.0
-    tangential_damping_ratio: float = 1.0
-    wall_friction: float | None = None  # particle-wall sliding friction (None: ``friction``)
-    wall_rolling_friction: float | None = None  # particle-wall rolling friction (None: ``rolling_friction``)
+    normal_stiffness: float = DEFAULTS["normal_stiffness"]  # k_n [N/m]
+    restitution: float = DEFAULTS["restitution"]
+    friction: float = DEFAULTS["friction"]
+    rolling_friction: float = DEFAULTS["rolling_friction"]
+    tangential_stiffness_ratio: float = DEFAULTS["tangential_stiffness_ratio"]  # k_t / k_n
+    tangential_damping_ratio: float = DEFAULTS["tangential_damping_ratio"]  # eta_t / eta_n
+    wall_friction: float | None = DEFAULTS["wall_friction"]  # particle-wall sliding friction (None: ``friction``)
+    wall_rolling_friction: float | None = DEFAULTS["wall_rolling_friction"]  # (None: ``rolling_friction``)
 
     def parameters(self, dt: float, mass: float) -> np.ndarray:
         """Kernel parameter vector; the damping is calibrated for particles of ``mass`` [kg] at ``dt``."""
