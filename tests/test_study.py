@@ -1860,7 +1860,7 @@ def test_a_run_that_ended_mixed_is_done_until_its_margin_is_raised(tmp_path):
     case still asks for that end; a raised margin, or none, has it resume."""
     from types import SimpleNamespace
 
-    from fvdem.study.tasks import _finished
+    from fvdem.study.records import run_at_end as _finished
 
     def case(margin=None, settled=False):
         return SimpleNamespace(time=SimpleNamespace(end=8.0, stop_when_settled=settled, stop_after_mixed=margin))

@@ -25,6 +25,10 @@ def _save(fig, path) -> Path:
     return path
 
 
+# the two under their public names, for the report packages and the study engine's figures
+pyplot, save_figure = _pyplot, _save
+
+
 def read_timeseries(out) -> dict:
     with open(Path(out) / "timeseries.csv", newline="") as fh:
         rows = list(csv.reader(fh))

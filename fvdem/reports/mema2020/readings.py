@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import math
 
-from .report import (ENDED, ENTROPY_TIMES, LATER_READINGS, _alike, _by_velocity, _compare, _critical,
+from .report import (ENTROPY_TIMES, LATER_READINGS, _alike, _by_velocity, _compare, _critical,
                        _expansion_runs, _margin, _margin_words, _sample_variance, _satterthwaite, _t95_runs,
-                       _tall_columns, _told_rows)
+                       _tall_columns, _told_rows, row_ended)
 
 FIXED = "2026-12-07"  # the date these rules were committed, before stage 3's first run
 LITTLE = 0.20  # "little change": every velocity's mean t95 at or above 2.3 Umf within this of the largest
@@ -130,7 +130,7 @@ def dense_expansion(rows, paper: str) -> dict:
     its settled height: ``dense_bed_expansion``, what the snapshots of Figs. 5, 6 and 8 show as the bed) at every
     velocity both ran, told by the replicas' spread."""
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf (second reading: the dense bed, Figs. 5-8)"
-    rows = [r for r in _expansion_runs(rows) if r["status"] in ENDED and r.get("dense_bed_expansion") is not None]
+    rows = [r for r in _expansion_runs(rows) if row_ended(r) and r.get("dense_bed_expansion") is not None]
     a, b = _by_velocity(rows, "ar4_mp", "dense_bed_expansion"), _by_velocity(rows, "ar1", "dense_bed_expansion")
     told, untold, values = {}, [], {}
     for v in sorted(set(a) & set(b)):

@@ -13,8 +13,23 @@ from dataclasses import replace
 
 from ...analysis.plots import COLOUR_LAYERS
 from ...scenes.observables import colour_layer_record
-from ...study.records import ENDED, FAILED, IN_PROGRESS, folder_case
+from ...study.records import RunState, folder_case, state_of
 from ...study.registry import StudyReport, register_report
+
+
+def row_ended(row: dict) -> bool:
+    """Whether a table row's run has ended (its status on record, ``state_of``)."""
+    return state_of(row["status"]) is RunState.ENDED
+
+
+def row_on_the_way(row: dict) -> bool:
+    """Whether a table row's run may yet bring a result (neither ended, failed nor out of the study file)."""
+    return state_of(row["status"]).on_the_way
+
+
+def row_failed(row: dict) -> bool:
+    """Whether a table row's run failed."""
+    return state_of(row["status"]) is RunState.FAILED
 
 
 # s: the window of the bed's height and of its channels, the same in every run whatever its length (8 s,
@@ -486,7 +501,7 @@ def _replica_cost(rows, family: str, v, column: str | None = None) -> float | No
     that reached their end (of those whose own family, ``column``, is ``column`` alone where given: the runs cut
     short of ``_expansion_runs``; without it, of the runs that ended when they mixed alone where the point has some,
     ``_t95_runs``: the replicas a t95 finding's plan adds are of those); None without one."""
-    ended = [r for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v and r["status"] in ENDED
+    ended = [r for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v and row_ended(r)
              and r.get("cpu_seconds") and (column is None or r.get("column") == column)]
     cut = [r for r in ended if r.get("cut_at_t95")]
     cpu = [r["cpu_seconds"] for r in (cut if column is None and cut else ended)]
@@ -536,7 +551,7 @@ def _compare_binarity(rows) -> dict:
     claim = "AR-1 void fractions more binary than AR-4 (Fig. 7)"
     by = {}
     for r in rows:
-        if r["family"] in ("ar1", "ar4_mp") and r["status"] != FAILED and r.get("void_fraction_binarity") is not None:
+        if r["family"] in ("ar1", "ar4_mp") and not row_failed(r) and r.get("void_fraction_binarity") is not None:
             by.setdefault(r.get("gas.u_over_umf"), {}).setdefault(r["family"], []).append(r["void_fraction_binarity"])
     common = sorted(v for v, fam in by.items() if v is not None and len(fam) == 2)
     if not common:
@@ -598,7 +613,7 @@ def _by_velocity(rows, family, key):
     """``{U/Umf: [row[key], ...]}`` of the runs of a family that did not fail (replicas together)."""
     out = {}
     for r in rows:
-        if r["family"] == family and r["status"] != FAILED and "gas.u_over_umf" in r:
+        if r["family"] == family and not row_failed(r) and "gas.u_over_umf" in r:
             out.setdefault(r["gas.u_over_umf"], []).append(r.get(key))
     return out
 
@@ -942,7 +957,7 @@ def _expansion(rows) -> dict:
 def _expansion_sample(rows) -> tuple[list, list]:
     """The runs whose bed expansion counts (ended, with ``bed_expansion``) and, apart, those left out because
     their bed's top stood at the outlet for most of the window (``_roofed``: no height of its own there)."""
-    ended = [r for r in rows if r["status"] in ENDED and r.get("bed_expansion") is not None]
+    ended = [r for r in rows if row_ended(r) and r.get("bed_expansion") is not None]
     at_roof = [_roofed(r) for r in ended]
     return ([r for r, roof in zip(ended, at_roof) if not roof], [r for r, roof in zip(ended, at_roof) if roof])
 
@@ -1051,7 +1066,7 @@ def _roof_note(finding: dict, rows: list, families) -> dict:
     used = _velocities_in(finding.get("values"))
     roofed = {}
     for r in rows:
-        if r["family"] in families and _among((r["gas.u_over_umf"],), used) and r["status"] in ENDED and _roofed(r):
+        if r["family"] in families and _among((r["gas.u_over_umf"],), used) and row_ended(r) and _roofed(r):
             roofed.setdefault((r["family"], r["gas.u_over_umf"]), []).append(r.get("roof_share"))
     if not roofed:
         return finding
@@ -1115,7 +1130,7 @@ def _shares(shares: list, where: str = "there at the end") -> str:
 def _told_rows(rows) -> list:
     """The rows the findings count: a run that has mixed, or is no longer on its way (a run still running and
     not yet mixed, or not started, is left out, not taken as unmixed)."""
-    return [r for r in rows if r.get("t95") is not None or r["status"] not in IN_PROGRESS]
+    return [r for r in rows if r.get("t95") is not None or not row_on_the_way(r)]
 
 
 WINDOW_TIMES = tuple(1.0 + 0.5 * k for k in range(15))  # s: 1.0, 1.5, ..., 8.0: the entropy curve's window
@@ -1256,7 +1271,7 @@ def _on_the_way(counted, base: str, v, kind: str) -> int:
     """How many of the study's runs that count as ``base``'s at ``v`` in a finding of ``kind`` (``counted``: the
     study's rows as ``_counted_as`` maps them for ``kind``) have no result yet (not started, or on their way and
     not mixed where ``kind`` is t95)."""
-    return sum(r["family"] == base and r.get("gas.u_over_umf") == v and r["status"] in IN_PROGRESS
+    return sum(r["family"] == base and r.get("gas.u_over_umf") == v and row_on_the_way(r)
                and (kind != T95 or r.get("t95") is None) for r in counted)
 
 
@@ -1337,7 +1352,7 @@ def _mixed_or_ended(r: dict) -> bool:
     """Whether the t95 chart shows a run (``report`` derived its status): mixed (its t95 known), or ended
     unmixed (its end a lower bound of t95); a run still on its way and not yet mixed is left out (its current
     time bounds nothing yet)."""
-    return r.get("t95") is not None or r["status"] in ENDED
+    return r.get("t95") is not None or row_ended(r)
 
 
 # the paper's pairs of families, the second drawn solid and the first dashed as in its figures, and the velocities
@@ -1365,7 +1380,7 @@ def _figures(out: Path, runs: list) -> list:
         mine = [r for r in runs if r["family"] == family]
         paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in mine], out / f"mixing_{family}.png",
                                              names=[family] * len(mine), levels=levels,
-                                             ended=[r["status"] in ENDED for r in mine]))
+                                             ended=[row_ended(r) for r in mine]))
     # the paper's pairs as the findings take them: a taller column's runs that mixed or ended for their family's
     # at their point (``_tall_columns``), named as their own family on the charts
     standing = [r for r in runs if not r["family"].endswith(TALL) or _mixed_or_ended(r)]
@@ -1383,7 +1398,7 @@ def _figures(out: Path, runs: list) -> list:
             styles = {first: "--", second: "-", first + TALL: "--", second + TALL: "-"}
             paths.append(plot_mixing_by_velocity([Path(r["folder"]) for r in pairs], out / f"{figure}_mixing.png",
                                                  names=[_column(r) for r in pairs], styles=styles,
-                                                 levels=levels, ended=[r["status"] in ENDED for r in pairs]))
+                                                 levels=levels, ended=[row_ended(r) for r in pairs]))
     if shown:
         paper = {family: (t95, TERMINAL_FROM, f"{family}: the paper's terminal t95, about {t95:g} s")
                  for family, t95 in PAPER_TERMINAL_T95.items()}
@@ -1433,7 +1448,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     the mixing entropy at the end and the one its bed would
     have with its colours shuffled at random (the grid's ceiling; runs that ended from 2026-12-04 on), the
     void fractions' binarity and the largest overlap's median, 99th percentile and maximum (``_overlaps``)."""
-    record = void_fraction_record(folder) if r["status"] != FAILED else None
+    record = void_fraction_record(folder) if not row_failed(r) else None
     case = folder_case(folder)
     gas, roof = (None, None) if case is None else (case.gas, case.domain.upper[2])
     passes, ramp = _inlet_passes_umf(gas), None if gas is None else gas.inlet_ramp
@@ -1441,7 +1456,7 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
     t95 = r.get("t95")
     # the colour-by-layer record (snapshots read unless archived), once: for the dense bed of an ended run and
     # the share pinned at the outlet of one whose top reached it
-    layers = colour_layer_record(folder) if r["status"] in ENDED or _reaches_roof(series, roof) else None
+    layers = colour_layer_record(folder) if row_ended(r) or _reaches_roof(series, roof) else None
     return {"t95": t95, "inlet_passes_umf": passes, "column_height": roof, "cpu_seconds": data.get("cpu_seconds"),
             "t95_from_inlet_at_umf": None if t95 is None or passes is None else t95 - passes,
             "pressure_drop_over_weight": data.get("pressure_drop_over_weight"),
@@ -1449,11 +1464,11 @@ def _columns(r: dict, folder: Path, data: dict, series) -> dict:
                                               if "bed_pressure_drop_std_second_half" in data
                                               else data.get("pressure_drop_std_over_weight")),
             "bed_height": _bed_surface(series, ramp), "bed_expansion": _bed_expansion(series, ramp),
-            "dense_bed_expansion": _dense_bed_expansion(layers, ramp) if r["status"] in ENDED else None,
+            "dense_bed_expansion": _dense_bed_expansion(layers, ramp) if row_ended(r) else None,
             "bed_at_roof": _at_roof(series, roof, ramp), "roof_share": _roof_share(series, roof, layers),
             "gas_max_speed_over_inlet": (None if fastest is None or gas is None or not gas.inlet_velocity
                                          else fastest / gas.inlet_velocity),
-            **(_channel_means(folder, ramp) if r["status"] != FAILED else {}),
+            **(_channel_means(folder, ramp) if not row_failed(r) else {}),
             "final_mixing_entropy": (float(series["mixing_entropy"][-1])
                                      if series is not None and "mixing_entropy" in series else None),
             "mixing_entropy_random": data.get("mixing_entropy_random"),
