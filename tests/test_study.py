@@ -184,7 +184,7 @@ def test_the_report_pairs_the_families_of_the_papers_figures(tmp_path, monkeypat
     families ran, with every replica of each; a family without its partner draws no pair."""
     import fvdem.analysis.plots as plots
     from fvdem.study import report
-    import fvdem.reports.mema2020.report as mema
+    import fvdem.reports.mema2020.figures as mema
     drawn, plot_mixing, plot_void_fractions = {}, plots.plot_mixing, mema.plot_void_fractions
     monkeypatch.setattr(plots, "plot_mixing", lambda folders, path: drawn.setdefault(
         Path(path).name, [Path(f).name for f in folders]) and plot_mixing(folders, path))
@@ -252,7 +252,7 @@ def test_the_share_of_the_window_with_the_bed_top_at_the_outlet():
     """``bed_at_roof``: over the window (1 s after a 1 s ramp, for 3 s), the share of samples whose bed_top lies
     within 1 cm of the outlet."""
     import numpy as np
-    from fvdem.reports.mema2020.report import _at_roof
+    from fvdem.reports.mema2020.table import _at_roof
     time = np.round(np.arange(0, 8.001, 0.01), 2)
     top = np.where((time >= 2.0) & (time < 3.5), 1.05, 0.6)  # at the roof for the first half of 2-5 s
     series = {"time": time, "bed_top": top}
@@ -270,7 +270,7 @@ def test_the_share_of_the_particles_pinned_at_the_outlet_at_the_end(tmp_path):
     import numpy as np
     from fvdem.analysis.plots import COLOUR_LAYERS
     from fvdem.scenes.observables import colour_layer_record
-    from fvdem.reports.mema2020.report import _reaches_roof, _roof_share
+    from fvdem.reports.mema2020.table import _reaches_roof, _roof_share
     time = np.round(np.arange(0, 6.001, 0.5), 2)
     series = {"time": time, "bed_top": np.where(time >= 1.5, 1.05, 0.5)}
     record = {"z_lower": 0.0, "layer_height": 0.03, "times": [0.0, 6.0],
@@ -292,7 +292,7 @@ def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():
     counts: the share of the filled height); ``_dense_bed_expansion``: its mean over the window at the snapshots
     over its first, unmoved by the few particles thrown far above the bed that set the 99 % top."""
     import numpy as np
-    from fvdem.reports.mema2020.report import _centre_quantile, _dense_bed_expansion
+    from fvdem.reports.mema2020.table import _centre_quantile, _dense_bed_expansion
     assert _centre_quantile([100] * 10, 0.0, 0.03) == pytest.approx(0.9 * 0.3)  # uniform over 0-0.3 m
     assert _centre_quantile([100] * 10, 0.1, 0.03, share=0.5) == pytest.approx(0.1 + 0.15)
     assert _centre_quantile([0, 50, 50], 0.0, 0.1, share=0.5) == pytest.approx(0.2)  # the first layer holds none
@@ -311,27 +311,28 @@ def test_the_dense_beds_height_and_expansion_from_the_centres_by_layer():
 
 
 def test_how_many_replicas_would_tell_comes_with_their_core_hours():
-    """``_replicas_to_tell``: the replicas in all of each series that bring the standard error times Student's t
+    """``replicas_to_tell``: the replicas in all of each series that bring the standard error times Student's t
     (at the plan's degrees of freedom) below what tells the difference, at the least cost (equal spreads and
-    costs: equal counts, ``sqrt(sum var / n)``; a series 4 times the cost gets half the replicas); ``_to_tell``:
+    costs: equal counts, ``sqrt(sum var / n)``; a series 4 times the cost gets half the replicas); ``to_tell``:
     them, with the core-hours of those to add at a replica's CPU seconds there so far (``_replica_cost``: the mean
     of the runs at their end, of one column alone where asked)."""
-    from fvdem.reports.mema2020.report import _critical, _replica_cost, _replicas_to_tell, _satterthwaite, _to_tell
+    from fvdem.reports.mema2020.rules import _replica_cost
+    from fvdem.reports.mema2020.spread import critical, replicas_to_tell, satterthwaite, to_tell
 
     def margin_squared(n, m):  # t^2 (1 / n + 1 / m) at the Welch-Satterthwaite degrees of freedom, unit variances
-        return _critical(_satterthwaite([1 / n, 1 / m], [n - 1, m - 1])) ** 2 * (1 / n + 1 / m)
+        return critical(satterthwaite([1 / n, 1 / m], [n - 1, m - 1])) ** 2 * (1 / n + 1 / m)
     # many replicas: t about 2 (2.006 at df 401): 202 and 201 bring it below 0.2^2, 201 and 201 do not
-    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.2, None) == [202, 201]
+    assert replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.2, None) == [202, 201]
     assert margin_squared(202, 201) <= 0.04 < margin_squared(201, 201)
-    assert _replicas_to_tell([(2, 1.0, 4.0), (2, 1.0, 1.0)], 0.2, None) == [152, 303]  # cost 911 against 1,000
+    assert replicas_to_tell([(2, 1.0, 4.0), (2, 1.0, 1.0)], 0.2, None) == [152, 303]  # cost 911 against 1,000
     assert margin_squared(152, 303) <= 0.04 < margin_squared(151, 303)
     # few: two a side already hold the difference to 2 standard errors (2 / 2 = 1 = (2 / 2)^2), but at df 2 t is
     # 4.53; four a side (df 6, t 2.52: 6.33 x 2 / 4 = 3.17 <= 4), where three (df 4, t 2.87: 8.24 x 2 / 3) fall short
-    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 2.0, None) == [4, 4]
-    assert _critical(2) == pytest.approx(4.5265, abs=1e-4) and _critical(None) == 2.0
-    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.0, None) is None  # nothing to tell
-    assert _replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 1e-4, None) is None  # beyond MAX_PLANNED
-    assert _replicas_to_tell([(50, 1.0, None), (50, 1.0, None)], 2.0, None) is None  # none missing
+    assert replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 2.0, None) == [4, 4]
+    assert critical(2) == pytest.approx(4.5265, abs=1e-4) and critical(None) == 2.0
+    assert replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 0.0, None) is None  # nothing to tell
+    assert replicas_to_tell([(2, 1.0, None), (2, 1.0, None)], 1e-4, None) is None  # beyond MAX_PLANNED
+    assert replicas_to_tell([(50, 1.0, None), (50, 1.0, None)], 2.0, None) is None  # none missing
 
     def run(family, v, cpu, status="finished", **more):
         return {"family": family, "gas.u_over_umf": v, "status": status, "cpu_seconds": cpu, **more}
@@ -345,11 +346,11 @@ def test_how_many_replicas_would_tell_comes_with_their_core_hours():
     assert _replica_cost(rows, "ar1", 2.0) == 6000.0 and _replica_cost(rows, "ar1", 1.6) == 2000.0
     # 14 of each: AR-1 has 4 (10 more at 2000 s), AR-4 MP 3 (11 more at 7200 s): 27.6 core-hours
     series = [("ar1", 4, 2000.0), ("ar4_mp", 3, 7200.0)]
-    assert _to_tell([14, 14], series) == (
+    assert to_tell([14, 14], series) == (
         "about 14 of ar1 and 14 of ar4_mp in all would tell (now 4 and 3), if the means and spread stay: [[points]]; "
         "about 27.6 core-hours at their runs' cost so far")
-    assert _to_tell([14, 14], [series[0], ("ar4_mp", 3, None)]).endswith("stay: [[points]]")  # a cost unknown
-    assert _to_tell(None, series) == "more replicas would tell: [[points]]"
+    assert to_tell([14, 14], [series[0], ("ar4_mp", 3, None)]).endswith("stay: [[points]]")  # a cost unknown
+    assert to_tell(None, series) == "more replicas would tell: [[points]]"
 
 
 def test_a_findings_numbers_read_as_one_line():
@@ -363,7 +364,8 @@ def test_the_papers_fig7_pools_each_familys_replicas_panel_by_panel(tmp_path, mo
     """Fig. 7 as the paper draws it: a panel per velocity, one histogram per family, its replicas pooled by
     their cells, each replica's binarity in the label; a velocity without snapshots says so."""
     import fvdem.analysis.plots as plots
-    from fvdem.reports.mema2020.report import VOID_FRACTION, plot_void_fraction_panels
+    from fvdem.reports.mema2020.figures import plot_void_fraction_panels
+    from fvdem.reports.mema2020.table import VOID_FRACTION
     edges = [0.05 * k for k in range(21)]
     runs = []
     for name, family, cells, peak, binarity in (("a1", "ar1", 100, 9, 0.4), ("a2", "ar1", 300, 10, 0.5),
@@ -433,7 +435,7 @@ def test_a_run_in_progress_is_reported_from_its_time_series_not_from_an_earlier_
     assert row["overlap_p99"] == pytest.approx(np.percentile(overlap, 99)) and row["overlap_p99"] < 0.3
     # runs of different lengths (8 s; ended at 5.5 s, 2 s past t95) over one window: a bed rising slowly
     # stands as high in both (over their second halves it would not: 6 s against 4.1 s)
-    from fvdem.reports.mema2020.report import _bed_surface
+    from fvdem.reports.mema2020.table import _bed_surface
     runs = [{"time": np.linspace(0.0, end, int(end * 100) + 1)} for end in (8.0, 5.5)]
     for series in runs:
         series["bed_top"] = 0.3 + 0.01 * series["time"]
@@ -529,15 +531,15 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     # being unknown): five of each (df 8, t 2.37: 5.61 x 9.857 x 2 / 5 = 22.1 <= 22.8), not the two-sided order's
     # 2.78 (12 of each; the planner said 11 and 10 before the plans became one-sided, and 4 and 4 with 2 for t)
     assert "about 5 of ar4_mp and 5 of ar4_mp_drag in all would tell (now 2 and 2)" in open_["why"]
-    from fvdem.reports.mema2020.report import _alike, _replicas_to_tell
+    from fvdem.reports.mema2020.spread import replicas_to_tell, told_alike
     var = 4.44 ** 2 / 2
-    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0, bounded=True) == [5, 5]
-    assert _replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0) == [12, 12]  # two-sided: the order
+    assert replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0, bounded=True) == [5, 5]
+    assert replicas_to_tell([(2, var, None), (2, var, None)], 2.78, 2.0) == [12, 12]  # two-sided: the order
     # and at these means and spread five and five do tell it, four and five not yet
     d = (var / 2.5) ** 0.5  # five values of mean 17.22 and variance ``var``
     five = [17.22 + k * d for k in (-2, -1, 0, 1, 2)]
-    assert _alike([20.0] * 5, five, bounded=True).startswith("not below: the mean 20")
-    assert _alike([20.0] * 4, five, bounded=True) is None
+    assert told_alike([20.0] * 5, five, bounded=True).startswith("not below: the mean 20")
+    assert told_alike([20.0] * 4, five, bounded=True) is None
     # SP against MP "only a slight effect": mean t95s within 20 % of MP's; an unmixed family's mean a lower
     # bound, which decides once the gap it leaves reaches 20 % (SP mixed at 4.26 s, MP not by 20 s: > 0.79)
     claim = "single- against multi-particle closures: only a slight effect on AR-4 mixing"
@@ -588,15 +590,15 @@ def test_replicas_all_counted_at_one_end_have_an_unknown_spread_not_none():
     """Two AR-4 MP replicas both unmixed by 20 s (counted at 20, 20: sample variance 0) against one drag-only run
     mixed at 19.8 s: the error of the difference is not 0 (which would tell a 1 % gap); each side takes the
     other's variance, and where neither has one the 10 % rule decides."""
-    from fvdem.reports.mema2020.report import _within_spread
-    assert _within_spread([20.0, 20.0], [19.8]) == "means 20 (20, 20) against 19.8 (19.8), within 10 % and no " \
+    from fvdem.reports.mema2020.spread import within_spread
+    assert within_spread([20.0, 20.0], [19.8]) == "means 20 (20, 20) against 19.8 (19.8), within 10 % and no " \
         "spread known"
-    assert _within_spread([20.0, 20.0], [15.0]) is None  # 25 % apart: told
+    assert within_spread([20.0, 20.0], [15.0]) is None  # 25 % apart: told
     # a spread on one side serves both: 16.5, 17.3 (sample variance 0.32) against 20, 20: error
     # sqrt(0.32 / 2 + 0.32 / 2) = 0.566 with the lender's degree of freedom on both sides (df 2: t 4.53), so 3.1 s
     # apart is told and 0.9 s is not
-    assert _within_spread([20.0, 20.0], [16.5, 17.3]) is None
-    assert "within 4.53 standard errors (2.56)" in _within_spread([18.0, 18.0], [16.5, 17.3])
+    assert within_spread([20.0, 20.0], [16.5, 17.3]) is None
+    assert "within 4.53 standard errors (2.56)" in within_spread([18.0, 18.0], [16.5, 17.3])
 
 
 def test_values_within_their_spread_are_alike_only_where_the_spread_rules_out_a_difference_of_ten_percent():
@@ -605,26 +607,26 @@ def test_values_within_their_spread_are_alike_only_where_the_spread_rules_out_a_
     degrees of freedom (6.61), within 10 % of 4.29; 4.0 / 4.7 against 4.0 / 4.6 are within their spread but not
     alike; one run each tells nothing of likeness, and one run takes the other family's variance (and its degrees
     of freedom)."""
-    from fvdem.reports.mema2020.report import _alike
-    assert _alike([4.21, 4.25], [4.30, 4.28]).startswith("alike: the means 4.23 and 4.29 differ by 0.06, with 6.61 "
+    from fvdem.reports.mema2020.spread import told_alike
+    assert told_alike([4.21, 4.25], [4.30, 4.28]).startswith("alike: the means 4.23 and 4.29 differ by 0.06, with 6.61 "
                                                          "standard errors at most 0.208")
-    assert _alike([4.0, 4.7], [4.0, 4.6]) is None
-    assert _alike([4.21], [4.30]) is None
+    assert told_alike([4.0, 4.7], [4.0, 4.6]) is None
+    assert told_alike([4.21], [4.30]) is None
     # 4.25 against 4.2, 4.3, 4.2, 4.3 (variance 0.00333 both sides, df 3 each: 4.4 in all, t 2.76): 0 + 0.178 < 0.425;
     # against two (df 1 each) not: t 5.5
-    assert _alike([4.2, 4.3] * 2, [4.25]).endswith("with 2.76 standard errors at most 0.178, within 10 % of the "
+    assert told_alike([4.2, 4.3] * 2, [4.25]).endswith("with 2.76 standard errors at most 0.178, within 10 % of the "
                                                    "larger (0.425)")
-    assert _alike([4.2, 4.3], [4.25]) is None
+    assert told_alike([4.2, 4.3], [4.25]) is None
     # more replicas of the same spread tell two values 3 % apart alike, where two each did not
-    assert _alike([4.0, 4.3], [4.15, 4.45]) is None
-    assert _alike([4.0, 4.3] * 4, [4.15, 4.45] * 4) is not None
+    assert told_alike([4.0, 4.3], [4.15, 4.45]) is None
+    assert told_alike([4.0, 4.3] * 4, [4.15, 4.45] * 4) is not None
 
 
 def test_the_bed_expansion_figure_draws_what_the_finding_counts(tmp_path, monkeypatch):
     """``bed_expansion.png`` (the report's, from the table's rows) shows the runs the expansion finding counts:
     a "<family>_expansion" family's runs as their family's, a taller column's in place of the paper's column's
     at its velocity, a bed whose top stood at the outlet apart (a cross), runs still on their way left out."""
-    import fvdem.reports.mema2020.report as mema
+    import fvdem.reports.mema2020.figures as mema
     from fvdem.reports.mema2020 import check_findings
 
     def row(family, ratio, height, status="finished", **more):
@@ -640,7 +642,7 @@ def test_the_bed_expansion_figure_draws_what_the_finding_counts(tmp_path, monkey
     real = mema.plot_expansion
     monkeypatch.setattr(mema, "plot_expansion", lambda measured, roofed, path: drawn.update(
         measured=measured, roofed=roofed) or real(measured, roofed, path))
-    assert mema._table_figures(tmp_path, rows) == [tmp_path / "bed_expansion.png"]
+    assert mema.draw_table_figures(tmp_path, rows) == [tmp_path / "bed_expansion.png"]
     assert (tmp_path / "bed_expansion.png").stat().st_size > 10_000
     shown = sorted((r["family"], r["gas.u_over_umf"], r["bed_expansion"]) for r in drawn["measured"])
     finding = {f["finding"]: f for f in check_findings(rows)}["AR-4 beds expand more than AR-1 at the same U/Umf"]
@@ -650,7 +652,7 @@ def test_the_bed_expansion_figure_draws_what_the_finding_counts(tmp_path, monkey
                                 ("ar4_mp", 1.6, 1.63), ("ar4_mp", 1.6, 2.2), ("ar4_mp", 1.6, 2.57),
                                 ("ar4_mp", 2.9, 4.0)]
     assert [(r["family"], r["bed_expansion"]) for r in drawn["roofed"]] == [("ar4_mp", 5.0)]  # the 1.05 m AR-1 aside
-    assert mema._table_figures(tmp_path, [row("ar4_sp", 1.6, 1.9)]) == []  # neither family: no figure
+    assert mema.draw_table_figures(tmp_path, [row("ar4_sp", 1.6, 1.9)]) == []  # neither family: no figure
 
 
 def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, monkeypatch):
@@ -659,7 +661,7 @@ def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, 
     as a taller column's; neither in the bed expansion (a window it may not reach) nor in the void fractions
     (over the second half of a run that ended at t95)."""
     from fvdem.reports.mema2020 import check_findings
-    from fvdem.reports.mema2020.report import _figures
+    from fvdem.reports.mema2020.figures import draw_figures
 
     def row(family, v, t95, height, binarity):
         return {"family": family, "status": "finished", "gas.u_over_umf": v, "t95": t95, "simulated_seconds": 8.0,
@@ -691,7 +693,7 @@ def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, 
         {k: f for k, f in counted.items() if k not in (expansion, binarity)}
     # Fig. 4 draws them as their family's, Fig. 7 leaves them out
     import fvdem.analysis.plots as plots
-    import fvdem.reports.mema2020.report as mema
+    import fvdem.reports.mema2020.figures as mema
     drawn = {}
     monkeypatch.setattr(plots, "plot_t95", lambda folders, path, names=None, **kw: drawn.update(t95=sorted(names)))
     monkeypatch.setattr(mema, "plot_void_fraction_panels", lambda panels, path: drawn.update(
@@ -702,7 +704,7 @@ def test_runs_that_end_when_they_mix_count_for_the_t95_findings_alone(tmp_path, 
     runs = [{"name": f"{r['family']}_{k}", "family": r["family"], "status": "finished", "t95": r["t95"],
              "point": {"gas.u_over_umf": r["gas.u_over_umf"]}, "folder": str(tmp_path / f"run{k}")}
             for k, r in enumerate(base + cut)]
-    _figures(tmp_path, runs)
+    draw_figures(tmp_path, runs)
     assert drawn["t95"] == ["ar1"] * 7 + ["ar4_mp"] * 6  # 4 and 4 whole, 3 and 2 cut at t95
     assert drawn["fig7"] == {2.0: ["ar1_0", "ar1_1", "ar4_mp_2", "ar4_mp_3"],
                              2.9: ["ar1_tall_4", "ar1_tall_5", "ar4_mp_tall_6", "ar4_mp_tall_7"]}  # whole runs alone
@@ -1084,11 +1086,13 @@ def test_points_tables_add_replicas_where_two_lie_within_their_spread_and_leave_
 
 def test_the_plan_of_the_open_findings_adds_the_replicas_they_ask_less_those_counted_and_on_the_way(tmp_path):
     """``plan_points`` (the report's plan.toml): AR-4 MP at 2 Umf 4.3 s (4.0, 4.6) against AR-1's 4.35 (4.0, 4.7)
-    lies within the spread; the finding's plan (``_replicas_to_tell``, kept in findings.json as data) asks 12 of
+    lies within the spread; the finding's plan (``replicas_to_tell``, kept in findings.json as data) asks 12 of
     AR-4 MP and 14 of AR-1 in all. The study has two of AR-1 and three of AR-4 MP there (the third not started):
     the tables raise them to 2 + 12 = 14 and 3 + (12 - 2 - 1) = 12, and appended to the study file they give
     exactly those runs, the earlier ones under their names."""
-    from fvdem.reports.mema2020.report import _replicas_to_tell, check_findings, plan_points
+    from fvdem.reports.mema2020.plan import plan_points
+    from fvdem.reports.mema2020.rules import check_findings
+    from fvdem.reports.mema2020.spread import replicas_to_tell
 
     def row(family, t95, replica, status="finished"):
         return {"family": family, "status": status, "gas.u_over_umf": 2.0, "t95": t95, "replica": replica,
@@ -1097,7 +1101,7 @@ def test_the_plan_of_the_open_findings_adds_the_replicas_they_ask_less_those_cou
             row("ar4_mp", None, 3, status="pending")]
     finding = check_findings(rows)[0]
     var = [0.18, 0.245]  # the sample variances of AR-4 MP's and AR-1's t95
-    plan = _replicas_to_tell([(2, var[0], None), (2, var[1], None)], 4.3 - 4.35, 0.435)
+    plan = replicas_to_tell([(2, var[0], None), (2, var[1], None)], 4.3 - 4.35, 0.435)
     assert plan == [12, 14] and finding["verdict"] == "open"
     assert finding["plans"] == [{"kind": "t95", "core_hours": None, "runs": [
         {"family": "ar4_mp", "u_over_umf": 2.0, "replicas": 12, "now": 2, "cpu_seconds": None},
@@ -1126,7 +1130,7 @@ def test_a_plans_replicas_are_of_the_cheapest_family_that_counts_in_the_column_t
     expansion's of ar1_expansion; a run cut short after the expansion window counts for no t95 finding, nor one
     that ends when it mixes for the expansion; and the runs on their way are counted in the column that
     stands."""
-    from fvdem.reports.mema2020.report import EXPANSION_KIND, T95, _counted_as, _on_the_way, _plan_family
+    from fvdem.reports.mema2020.plan import EXPANSION_KIND, T95, _counted_as, _on_the_way, _plan_family
     present = {("ar1", 2.0): 2, ("ar1_t95", 2.0): 8, ("ar1", 2.9): 1, ("ar1_tall", 2.9): 3,
                ("ar1_tall_t95", 2.9): 6, ("ar1", 1.6): 2, ("ar1_expansion", 1.7): 11, ("ar1", 1.7): 2}
     assert [_plan_family("ar1", v, T95, present) for v in (2.0, 2.9, 1.6, 1.7)] == [

@@ -25,8 +25,14 @@ def _save(fig, path) -> Path:
     return path
 
 
-# the two under their public names, for the report packages and the study engine's figures
-pyplot, save_figure = _pyplot, _save
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (for the report packages and the study engine's figures)."""
+    return _pyplot()
+
+
+def save_figure(fig, path) -> Path:
+    """Lay out, write as PNG and close a figure (``_save``; for the report packages and the study engine)."""
+    return _save(fig, path)
 
 
 def read_timeseries(out) -> dict:
