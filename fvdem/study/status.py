@@ -240,10 +240,16 @@ def _expect(runs: list, entries: list, folders: list) -> None:
 def _stop_settings(entry: dict, folder: Path, conditions: list) -> dict | None:
     """Each of ``conditions``' setting for a run: as its index entry lists it (``index_key``), else as its folder's
     case.toml sets it; None where neither tells (an older index, a run not begun)."""
-    if all(c.index_key in entry for c in conditions):
-        return {c: entry[c.index_key] for c in conditions}
-    case = folder_case(folder)
-    return None if case is None else {c: c.setting_of(case) for c in conditions}
+    settings, case = {}, None
+    for condition in conditions:
+        if condition.index_key in entry:
+            settings[condition] = entry[condition.index_key]
+            continue
+        case = case or folder_case(folder)
+        if case is None:
+            return None
+        settings[condition] = condition.setting_of(case)
+    return settings
 
 
 def _expected_ends() -> str:

@@ -103,21 +103,29 @@ def told_alike(a: list, b: list, bounded: bool = False) -> str | None:
     their end (not mixed by then), its mean a lower bound at or above ``b``'s: its true mean may lie anywhere above,
     so only one side is told, that ``b``'s mean lies at most ``CLOSE`` above it (``a`` does not lie below ``b`` by as
     much: against a claim that ``a`` is the lower, as decisive as alike). Returns the numbers as text, or None."""
-    spread = order_margin(a, b)
-    if spread is None:
+    told = alike_reach(a, b, bounded)
+    if told is None or told[0] >= told[1]:
         return None
-    error, k = spread
+    reach, margin, k = told
     means = [sum(v) / len(v) for v in (a, b)]
-    margin = CLOSE * max(means)
-    reach = (means[1] - means[0] if bounded else abs(means[0] - means[1])) + k * error
-    if reach >= margin:
-        return None
     within = f"within {100 * CLOSE:.0f} % of the larger ({margin:.3g})"
     if bounded:
         return (f"not below: the mean {means[0]:.3g}, a lower bound (runs not mixed by their end), against "
                 f"{means[1]:.3g}, which with {standard_errors(k)} lies at most {reach:.3g} above it, {within}")
     return (f"alike: the means {means[0]:.3g} and {means[1]:.3g} differ by {abs(means[0] - means[1]):.3g}, with "
             f"{standard_errors(k)} at most {reach:.3g}, {within}")
+
+
+def alike_reach(a: list, b: list, bounded: bool = False) -> tuple[float, float, float] | None:
+    """The numbers ``told_alike`` decides on: how far the difference of the means reaches with ``critical``
+    standard errors (``b``'s mean above ``a``'s alone where ``bounded``), the margin it must stay below (``CLOSE``
+    of the larger mean) and how many standard errors that is; None without a spread (``order_margin``)."""
+    spread = order_margin(a, b)
+    if spread is None:
+        return None
+    error, k = spread
+    means = [sum(v) / len(v) for v in (a, b)]
+    return (means[1] - means[0] if bounded else abs(means[0] - means[1])) + k * error, CLOSE * max(means), k
 
 
 def variances(a: list, b: list) -> list | None:
