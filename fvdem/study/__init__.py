@@ -61,9 +61,7 @@ from .tasks import STOP_FILE, StudyStopped, prepare_bed, run_task
 
 __all__ = ["CLUSTER_KINDS", "CLUSTER_TYPES", "DEFAULT_STOP_BEFORE_WALLTIME", "JOB_END_ENV", "REPORTS", "STOP_FILE",
            "STOP_MARGIN_ENV", "STUDY_KEYS", "BedSpec", "RunSpec", "Study", "StudyReport", "StudyStopped", "archive",
-           "check_cluster", "check_findings", "close_client", "cluster_keys", "job_deadline", "jobqueue_options",
-           "load_cluster", "load_study", "make_client", "map_tasks", "prepare_bed", "progress_line", "read_toml",
-           "register_report", "report", "report_for", "request_stop", "restore", "results", "run_study", "run_task",
-           "select_runs",
-           "study_from_table", "task_tag", "void_fraction_record", "void_fraction_samples", "walltime_seconds",
-           "write_index"]
+           "check_cluster", "close_client", "cluster_keys", "job_deadline", "jobqueue_options", "load_cluster",
+           "load_study", "make_client", "map_tasks", "prepare_bed", "progress_line", "read_toml", "register_report",
+           "report", "report_for", "request_stop", "restore", "results", "run_study", "run_task", "select_runs",
+           "study_from_table", "task_tag", "walltime_seconds", "write_index"]
