@@ -310,6 +310,7 @@ def test_a_run_taken_out_of_the_study_file_after_it_began_is_not_planned_and_sup
     back to planned where the file lists it again, and ``--supersede`` moves its folder to superseded/."""
     from fvdem.cli import _changed_folders
     from fvdem.study import report
+    from fvdem.study.reports import findings_page
     from fvdem.study.status import format_status, study_status
     out = tmp_path / "study"
     study = load_study(synthetic_study(tmp_path), out)
@@ -333,10 +334,10 @@ def test_a_run_taken_out_of_the_study_file_after_it_began_is_not_planned_and_sup
     text = format_status(status)
     assert f"1 not started of 1 runs; 0 of {first.duration:g} simulated s done" in text
     assert "1 run(s) not planned" in text and "--supersede" in text
-    report(out)  # the table lists it; the findings neither count nor draw it
-    rows = {r["name"]: r["status"] for r in json.loads((out / "table.json").read_text())}
-    assert rows == {first.name: "pending", second.name: "not planned"}
-    page = (out / "findings.md").read_text()
+    report(out)  # the table lists it; a findings page neither counts nor draws it
+    table = json.loads((out / "table.json").read_text())
+    assert {r["name"]: r["status"] for r in table} == {first.name: "pending", second.name: "not planned"}
+    page = findings_page("t", table, [], [])
     assert "0 of 1 runs at their end, 0 on the way, 1 not started, and 1 not planned" in page
     # listed again by the file, it is planned again
     assert "planned" not in write_index(out, study)["runs"][1]
@@ -871,7 +872,7 @@ def test_a_changed_study_is_refused_then_superseded_in_its_folder_and_its_archiv
     assert dest / "superseded" / first in written and dest / "superseded" / second in written
     assert "\nfriction = 0.46" in (dest / "superseded" / first / "case.toml").read_text()
     assert "\nfriction = 0.2" in (dest / "runs" / first / "case.toml").read_text()
-    assert ((dest / "runs" / first / "timeseries.csv").read_text()
-            != (dest / "superseded" / first / "timeseries.csv").read_text())
+    assert ((dest / "runs" / first / "summary.json").read_text()
+            != (dest / "superseded" / first / "summary.json").read_text())
     archive(out, dest)  # again: the archive holds the new definition, nothing more moves
     assert sorted(p.name for p in (dest / "superseded").iterdir()) == sorted([first, second])
