@@ -302,7 +302,8 @@ def cmd_info(args) -> int:
 
 def registered(kind: str | None = None) -> dict:
     """What the registries hold: drag, lift and torque laws, voidage methods, stochastic forces, scenes, DEM
-    backends and study reports, each name with what it is, where it applies and its reference."""
+    backends, the early ends a run records and study reports, each name with what it is, where it applies and its
+    reference."""
     from .coupling.closures import LAWS
     from .coupling.voidage import METHODS
     from .scenes import SCENES
@@ -317,6 +318,9 @@ def registered(kind: str | None = None) -> dict:
     table["scenes"] = {name: {"summary": s.summary} for name, s in SCENES.items()}
     from .dem.backends import BACKENDS
     table["dem_backend"] = {name: {"summary": description} for name, (_, description) in BACKENDS.items()}
+    from .scenes.stops import STOP_CONDITIONS
+    table["stop_condition"] = {name: {"summary": c.summary, "setting": c.setting}
+                               for name, c in STOP_CONDITIONS.items()}
     from .study import REPORTS, report_for
     report_for(None)  # every registered report
     table["report"] = {name: {"summary": r.summary} for name, r in REPORTS.items()}
@@ -354,7 +358,7 @@ def cmd_laws(args) -> int:
         print(f"{kind}:")
         for name, entry in entries.items():
             print(f"  {name}: {entry['summary']}")
-            for key in ("shapes", "aspect_ratio", "validity", "reference"):
+            for key in ("shapes", "aspect_ratio", "validity", "reference", "setting"):
                 if entry.get(key):
                     value = ", ".join(entry[key]) if isinstance(entry[key], list) else entry[key]
                     print(f"      {key.replace('_', ' ')}: {value}")
@@ -534,9 +538,9 @@ def make_parser() -> argparse.ArgumentParser:
                              "(docs/schema/ holds copies)")
     schema.set_defaults(func=cmd_schema)
     laws = sub.add_parser("laws", help="list the registered closures, voidage methods, stochastic forces, scenes, DEM "
-                                       "backends and study reports")
+                                       "backends, stop conditions and study reports")
     laws.add_argument("kind", nargs="?", choices=("drag", "lift", "torque", "voidage", "stochastic_force", "scenes",
-                                                  "dem_backend", "report"),
+                                                  "dem_backend", "stop_condition", "report"),
                       help="only this registry (default: all)")
     laws.add_argument("--json", action="store_true", help="one JSON object")
     laws.set_defaults(func=cmd_laws)

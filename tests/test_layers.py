@@ -2,6 +2,7 @@
 nothing above them (the coupling, the scenes, the model, the study, the command line); what more than one
 layer needs lives in leaf modules (fvdem.errors, fvdem.correlations, fvdem.timing)."""
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -183,3 +184,31 @@ def test_the_bridge_owns_the_coupling_inputs_and_writes_nothing_of_the_dem():
                 or ".dem." in w or "particles." in w]
     assert not into_dem, into_dem
     assert any("inputs.drag_coefficient" in w for w in written)  # the check sees the bridge's own writes
+
+
+# what a published study's report or a scene knows, which the study engine must not: the mixing and its time,
+# the paper (seed 000, Mema et al. 2020) and its families, the stop condition's own key
+STUDY_WORDS = re.compile(r"mixing|mixed|t95|mema|stop_after_mixed|past_mixing|seed 000"
+                         r"|(?<![/_])\bar[14](?:_\w+)?\b(?!\.toml)", re.IGNORECASE)
+
+
+def test_the_study_engine_names_no_paper_nor_what_its_runs_measure():
+    """``fvdem/study`` is generic: no line of it (comments and docstrings included) names the mixing, t95, the
+    paper or its families. What ends a run early comes from the scenes' stop conditions (``fvdem.scenes.stops``),
+    what a study reports from a report registered by name (``fvdem.reports``)."""
+    found = [f"fvdem/study/{path.name}:{n}: {line.strip()}" for path in sorted((PACKAGE / "study").glob("*.py"))
+             for n, line in enumerate(path.read_text().splitlines(), 1) if STUDY_WORDS.search(line)]
+    assert not found, "\n".join(found)
+
+
+def test_no_underscored_name_crosses_modules_of_the_study_engine_or_its_reports():
+    """What a module of ``fvdem/study`` or ``fvdem/reports`` takes from another fvdem module has a public name
+    (a shared reader lives in a leaf such as ``fvdem.study.records`` under a public name; an underscored name is
+    its module's own)."""
+    crossing = []
+    for path in sorted([*(PACKAGE / "study").glob("*.py"), *(PACKAGE / "reports").rglob("*.py")]):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("fvdem")):
+                crossing += [f"{path.relative_to(PACKAGE.parent)}: {node.module or '.'} {a.name}" for a in node.names
+                             if a.name.startswith("_") and not a.name.startswith("__")]
+    assert not crossing, "\n".join(crossing)

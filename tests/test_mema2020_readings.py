@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from fvdem.reports.mema2020 import readings
-from fvdem.reports.mema2020.report import check_findings, entropy_columns
+from fvdem.reports.mema2020.rules import check_findings
+from fvdem.reports.mema2020.table import entropy_columns
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -25,6 +25,16 @@ def _save(fig, path) -> Path:
     return path
 
 
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (for the report packages and the study engine's figures)."""
+    return _pyplot()
+
+
+def save_figure(fig, path) -> Path:
+    """Lay out, write as PNG and close a figure (``_save``; for the report packages and the study engine)."""
+    return _save(fig, path)
+
+
 def read_timeseries(out) -> dict:
     with open(Path(out) / "timeseries.csv", newline="") as fh:
         rows = list(csv.reader(fh))

@@ -6,13 +6,13 @@ them start from, the axes to vary, exclusions, the duration and replicas::
     name = "smoke"
     duration = 0.04                    # simulated seconds of every run (time.end)
     replicas = 1                       # repeats, each from its own bed (insertion seed + k - 1)
-    report = "mema2020"                # its table, figures and findings (a registered report; "table" by default)
+    report = "table"                   # its table, figures and findings: a registered report ("table" by default)
     [settings]                         # for every run and bed
     "output.vtk" = false
     [beds.small]                       # prepared once, before the runs that start from it
     case = "../cases/bed_ar1.toml"
     set = {"particles.count" = 300}
-    [families.ar1]
+    [families.spheres]
     case = "../cases/ar1.toml"
     bed = "small"                      # particles.initial_state = the bed's final state
     set = {"particles.count" = 300}
@@ -20,7 +20,7 @@ them start from, the axes to vary, exclusions, the duration and replicas::
     [axes]
     "gas.u_over_umf" = [2.0, 2.9]
     [[exclude]]                        # drop the runs that match every key given (each one value or a list)
-    family = "ar1"
+    family = "spheres"
     "gas.u_over_umf" = 2.9
     [cluster]                          # optional: where the tasks run
     kind = "local"                     # or "slurm", "pbs", "sge", "lsf" (dask-jobqueue), with its options
@@ -47,7 +47,8 @@ The package, one module per job: ``sweep`` (the study file read and checked into
 worker), ``runner`` (the Dask runner, ``study.json``, ``map_tasks``), ``reports`` (the table, the figures
 and the archive of the registered report), the leaves ``records``, ``registry`` and ``specs``, and the
 designed experiments (``design``, ``designed``, ``screening``). A published study's report is a package of
-its own (``fvdem.reports``: e.g. ``fvdem.reports.mema2020``), registered by name.
+its own (``fvdem.reports``), registered by name; what ends a run early (and when a study may skip it) comes from
+the scenes' stop conditions (``fvdem.scenes.stops``).
 """
 from .checks import read_toml
 from .cluster import (CLUSTER_KINDS, CLUSTER_TYPES, DEFAULT_STOP_BEFORE_WALLTIME, JOB_END_ENV, STOP_MARGIN_ENV,
@@ -60,9 +61,7 @@ from .tasks import STOP_FILE, StudyStopped, prepare_bed, run_task
 
 __all__ = ["CLUSTER_KINDS", "CLUSTER_TYPES", "DEFAULT_STOP_BEFORE_WALLTIME", "JOB_END_ENV", "REPORTS", "STOP_FILE",
            "STOP_MARGIN_ENV", "STUDY_KEYS", "BedSpec", "RunSpec", "Study", "StudyReport", "StudyStopped", "archive",
-           "check_cluster", "check_findings", "close_client", "cluster_keys", "job_deadline", "jobqueue_options",
-           "load_cluster", "load_study", "make_client", "map_tasks", "prepare_bed", "progress_line", "read_toml",
-           "register_report", "report", "report_for", "request_stop", "restore", "results", "run_study", "run_task",
-           "select_runs",
-           "study_from_table", "task_tag", "void_fraction_record", "void_fraction_samples", "walltime_seconds",
-           "write_index"]
+           "check_cluster", "close_client", "cluster_keys", "job_deadline", "jobqueue_options", "load_cluster",
+           "load_study", "make_client", "map_tasks", "prepare_bed", "progress_line", "read_toml", "register_report",
+           "report", "report_for", "request_stop", "restore", "results", "run_study", "run_task", "select_runs",
+           "study_from_table", "task_tag", "walltime_seconds", "write_index"]

@@ -8,11 +8,11 @@ from pathlib import Path
 from ..errors import CaseError
 
 
-def _problem(problems, key, value, allowed):
+def problem(problems, key, value, allowed):
     problems.append(f"{key} = {value!r}: {allowed}")
 
 
-def _did_you_mean(key, allowed) -> str:
+def did_you_mean(key, allowed) -> str:
     import difflib
     close = difflib.get_close_matches(str(key), sorted(allowed), n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
@@ -29,10 +29,10 @@ def read_toml(path, what: str = "") -> dict:
         raise CaseError([f"{what}{path}: not valid TOML ({exc})"]) from None
 
 
-def _table(table, key, problems):
+def table_of(table, key, problems):
     value = table.get(key, {})
     if not isinstance(value, dict):
-        _problem(problems, key, value, "a table")
+        problem(problems, key, value, "a table")
         return {}
     return value
 
@@ -40,32 +40,32 @@ def _table(table, key, problems):
 REPLICAS_SPAN, PRIORITY_SPAN = (1, 1000), (-1000, 1000)  # the integers ``replicas`` and ``priority`` take
 
 
-def _seconds(value, path: str, problems) -> bool:
+def seconds_of(value, path: str, problems) -> bool:
     """Whether ``value`` is a number of simulated seconds (0 < value < 1e6); else a problem at ``path``."""
     if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < 1e6:
         return True
-    _problem(problems, path, value, "a number of simulated seconds > 0")
+    problem(problems, path, value, "a number of simulated seconds > 0")
     return False
 
 
-def _replicas(table: dict, path: str, default: int, problems) -> int:
+def replicas_of(table: dict, path: str, default: int, problems) -> int:
     """``table``'s ``replicas`` (``default`` when absent): an integer 1-1000, else a problem and 1."""
-    return _integer(table, "replicas", path, default, REPLICAS_SPAN, 1, problems)
+    return integer_in(table, "replicas", path, default, REPLICAS_SPAN, 1, problems)
 
 
-def _priority_of(table: dict, path: str, problems) -> int:
+def priority_of(table: dict, path: str, problems) -> int:
     """``table``'s ``priority`` (0 when absent): an integer -1000-1000, else a problem and 0."""
-    return _integer(table, "priority", path, 0, PRIORITY_SPAN, 0, problems,
+    return integer_in(table, "priority", path, 0, PRIORITY_SPAN, 0, problems,
                     " (the queue's tier: higher first, 0 by default)")
 
 
-def _integer(table: dict, key: str, path: str, default: int, span: tuple, fallback: int, problems,
+def integer_in(table: dict, key: str, path: str, default: int, span: tuple, fallback: int, problems,
              why: str = "") -> int:
     """``table[key]`` (``default`` when absent): an integer within ``span`` (a bool is not one), else a problem at
     ``path`` ("an integer <low>-<high>" and ``why``) and ``fallback``."""
     value = table.get(key, default)
     low, high = span
     if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
-        _problem(problems, path, value, f"an integer {low}-{high}{why}")
+        problem(problems, path, value, f"an integer {low}-{high}{why}")
         return fallback
     return value

@@ -10,7 +10,7 @@ import threading
 from pathlib import Path
 
 from ..errors import CaseError
-from .checks import _did_you_mean, _problem, read_toml
+from .checks import did_you_mean, problem, read_toml
 
 
 CLUSTER_KINDS = ("local", "slurm", "pbs", "sge", "lsf")
@@ -60,20 +60,20 @@ def check_cluster(cluster: dict, problems) -> None:
     knows, and ``memory`` for a batch scheduler."""
     kind = cluster.get("kind", "local")
     if not isinstance(kind, str) or kind not in CLUSTER_KINDS:
-        _problem(problems, "cluster.kind", kind, f"one of {', '.join(CLUSTER_KINDS)}")
+        problem(problems, "cluster.kind", kind, f"one of {', '.join(CLUSTER_KINDS)}")
         return
     allowed = cluster_keys(kind)
     for key in sorted(set(cluster) - allowed, key=str):
-        _problem(problems, f"cluster.{key}", cluster[key], f"unknown key for kind = {kind!r}"
-                 f"{_did_you_mean(key, allowed)}; allowed: {', '.join(sorted(allowed))}")
+        problem(problems, f"cluster.{key}", cluster[key], f"unknown key for kind = {kind!r}"
+                 f"{did_you_mean(key, allowed)}; allowed: {', '.join(sorted(allowed))}")
     for key, (kind_of, what, ok) in CLUSTER_TYPES.items():
         if key in cluster and key in allowed:
             value = cluster[key]
             if not isinstance(value, kind_of) or isinstance(value, bool) or not ok(value):
-                _problem(problems, f"cluster.{key}", value, what)
+                problem(problems, f"cluster.{key}", value, what)
     if kind != "local" and "memory" not in cluster:
         problems.append(f"cluster.memory: missing; a {kind} job needs the memory it books, e.g. memory = \"4GB\" "
-                        "(one run of the paper's bed needs about 1 GB: docs/studies.md, \"What a run costs\")")
+                        "(a run of the shipped fluidized beds needs about 1 GB: docs/studies.md, \"What a run costs\")")
 
 
 def walltime_seconds(text: str) -> int | None:

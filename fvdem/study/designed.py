@@ -6,18 +6,18 @@ case-override sets, expanded into the study's runs (``designed_runs``), with the
     [design]
     name = "screen"                        # its runs' family and name prefix: screen_01_r1, screen_02_r1, ...
     case = "../cases/ar1.toml"             # the base run, as a family's: case, bed, set, duration, priority
-    bed = "ar1"
+    bed = "loose"
     fraction = 2                           # 2^(k-2): the standard generators; or generators = ["E = ABC", ...]
     replicas = 2                           # each design point k times, replica k from its own bed (seed + k - 1)
     centre_points = 0                      # runs with every factor at its ``centre`` (each factor needs one)
-    responses = ["t95", "mixing_entropy@3.0", "dense_bed_expansion"]  # table columns, or series@time
-    censored = ["t95"]                     # responses a run may end without: its end time stands for them
+    responses = ["onset_time", "kinetic_energy@3.0", "bed_expansion"]  # table columns, or series@time
+    censored = ["onset_time"]              # responses a run may end without: its end time stands for them
     [design.factors.rolling]
     low = {}                               # the base run's own value
     high = {"contact.rolling_friction" = 0.0}
     [design.factors.packing]
     low = {}
-    high = {bed = "ar1_dense"}             # a level may start its runs from another of the study's beds
+    high = {bed = "dense"}                 # a level may start its runs from another of the study's beds
 
 Factors are lettered A, B, C, ... in the file's order; the runs follow the design's standard order, every
 point's first replica before any second one (a campaign cut short has the whole design once)."""
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import re
 
-from .checks import _did_you_mean, _integer, _priority_of, _problem, _replicas, _seconds
+from .checks import did_you_mean, integer_in, priority_of, problem, replicas_of, seconds_of
 from .design import DesignError, two_level
 
 FACTOR_KEYS = {"low", "high", "centre", "doc"}
@@ -39,41 +39,41 @@ def designed_runs(spec, settings: dict, duration, replicas: int, entry, bed_name
     ``study.json``; every problem (key path, value, what is allowed) appended to ``problems``. ``entry``: the
     study reader's (a family's case and overrides)."""
     if not isinstance(spec, dict):
-        _problem(problems, "design", spec, "a table ([design] with case, factors, ...)")
+        problem(problems, "design", spec, "a table ([design] with case, factors, ...)")
         return [], None
     case_path, sets = entry("design", None, spec)
     name = spec.get("name", "design")
     if not isinstance(name, str) or not re.match(r"^[A-Za-z][A-Za-z0-9_]*$", name):
-        _problem(problems, "design.name", name, "a plain name (letters, digits, _): it names the design's runs")
+        problem(problems, "design.name", name, "a plain name (letters, digits, _): it names the design's runs")
         name = "design"
     base_bed = spec.get("bed")
     if base_bed is not None and (not isinstance(base_bed, str) or base_bed not in bed_names):
-        _problem(problems, "design.bed", base_bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+        problem(problems, "design.bed", base_bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
         base_bed = None
     run_duration = spec.get("duration", duration)
-    if "duration" in spec and not _seconds(run_duration, "design.duration", problems):
+    if "duration" in spec and not seconds_of(run_duration, "design.duration", problems):
         run_duration = duration
     run_duration = float(run_duration) if isinstance(run_duration, (int, float)) else 0.0
-    design_replicas = _replicas(spec, "design.replicas", replicas, problems)
-    priority = _priority_of(spec, "design.priority", problems)
-    centre_points = _integer(spec, "centre_points", "design.centre_points", 0, (0, 100), 0, problems)
+    design_replicas = replicas_of(spec, "design.replicas", replicas, problems)
+    priority = priority_of(spec, "design.priority", problems)
+    centre_points = integer_in(spec, "centre_points", "design.centre_points", 0, (0, 100), 0, problems)
     factors = spec.get("factors")
     if not isinstance(factors, dict) or len(factors) < 2:
-        _problem(problems, "design.factors", factors, "a table of two or more factors ([design.factors.NAME] with "
+        problem(problems, "design.factors", factors, "a table of two or more factors ([design.factors.NAME] with "
                  "low = {...} and high = {...})")
         return [], None
     levels = {}
     for factor, table in factors.items():
         where = f"design.factors.{factor}"
         if not re.match(r"^[A-Za-z][A-Za-z0-9_]*$", factor):
-            _problem(problems, where, "...", "a plain factor name (letters, digits, _)")
+            problem(problems, where, "...", "a plain factor name (letters, digits, _)")
             continue
         if not isinstance(table, dict) or "low" not in table or "high" not in table:
-            _problem(problems, where, table, "a table with low = {...} and high = {...} (case keys and values; "
+            problem(problems, where, table, "a table with low = {...} and high = {...} (case keys and values; "
                      "bed = 'NAME' to start from another of the study's beds)")
             continue
         for k in sorted(set(table) - FACTOR_KEYS):
-            _problem(problems, f"{where}.{k}", table[k], f"unknown key{_did_you_mean(k, FACTOR_KEYS)}; allowed: "
+            problem(problems, f"{where}.{k}", table[k], f"unknown key{did_you_mean(k, FACTOR_KEYS)}; allowed: "
                      + ", ".join(sorted(FACTOR_KEYS)))
         levels[factor] = {}
         for level in ("low", "high", "centre"):
@@ -81,35 +81,35 @@ def designed_runs(spec, settings: dict, duration, replicas: int, entry, bed_name
                 continue
             value = table[level]
             if not isinstance(value, dict):
-                _problem(problems, f"{where}.{level}", value, "a table of case keys and values ({} for the base run's)")
+                problem(problems, f"{where}.{level}", value, "a table of case keys and values ({} for the base run's)")
                 continue
             bed = value.get("bed")
             if bed is not None and (not isinstance(bed, str) or bed not in bed_names):
-                _problem(problems, f"{where}.{level}.bed", bed,
+                problem(problems, f"{where}.{level}.bed", bed,
                          f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
                 continue
             levels[factor][level] = value
         if table.get("low") == table.get("high"):
-            _problem(problems, where, table, "two different levels (low and high set the same)")
+            problem(problems, where, table, "two different levels (low and high set the same)")
     if centre_points and any("centre" not in v for v in levels.values()):
         lacking = [f for f, v in levels.items() if "centre" not in v]
-        _problem(problems, "design.centre_points", centre_points, "centre points need every factor's centre = {...}; "
+        problem(problems, "design.centre_points", centre_points, "centre points need every factor's centre = {...}; "
                  f"{', '.join(lacking)} have none (a factor of two settings, e.g. a model on or off, has no centre)")
         centre_points = 0
     responses = spec.get("responses", [])
     if not isinstance(responses, list) or not responses or not all(isinstance(r, str) and RESPONSE.match(r)
                                                                    for r in responses):
-        _problem(problems, "design.responses", responses, "a non-empty list of responses: table columns of the "
-                 "study's report (e.g. 't95') or a time-series column at a time ('mixing_entropy@3.0')")
+        problem(problems, "design.responses", responses, "a non-empty list of responses: table columns of the "
+                 "study's report (e.g. 'bed_expansion') or a time-series column at a time ('kinetic_energy@3.0')")
         responses = []
     censored = spec.get("censored", [])
     if not isinstance(censored, list) or any(c not in responses for c in censored):
-        _problem(problems, "design.censored", censored, "a list of the design's responses that a run may end "
+        problem(problems, "design.censored", censored, "a list of the design's responses that a run may end "
                  "without (its end time stands for them: a lower bound)")
         censored = []
     confidence = spec.get("confidence", 0.95)
     if not isinstance(confidence, float) or not 0.5 <= confidence < 1.0:
-        _problem(problems, "design.confidence", confidence, "a number in [0.5, 1), e.g. 0.95")
+        problem(problems, "design.confidence", confidence, "a number in [0.5, 1), e.g. 0.95")
         confidence = 0.95
     names = list(factors)
     letters_of = {}
@@ -123,7 +123,7 @@ def designed_runs(spec, settings: dict, duration, replicas: int, entry, bed_name
         letters_of = {n: letter for n, letter in zip(names, "ABCDEFGHJKLMNOPQRSTUVWXYZ")}
         design = two_level(len(names), generators, names=letters_of, fraction=fraction)
     except DesignError as exc:
-        _problem(problems, "design", f"{len(names)} factors", str(exc))
+        problem(problems, "design", f"{len(names)} factors", str(exc))
         return [], None
     if case_path is None or len(levels) != len(names) or any(
             not {"low", "high"} <= set(levels[f]) or centre_points and "centre" not in levels[f] for f in names):

@@ -32,8 +32,9 @@ class StudyReport:
 
 REPORTS: dict[str, StudyReport] = {}
 DEFAULT_REPORT = "table"
-# the modules that register reports, imported on first use (the engine names no report of its own but "table")
-REPORT_MODULES = ("fvdem.reports.mema2020",)
+# the packages whose import registers reports, imported on first use (the engine names no report of its own but
+# "table"; ``fvdem.reports`` imports each published study's report package)
+REPORT_MODULES = ("fvdem.reports",)
 
 
 def register_report(report: StudyReport) -> StudyReport:

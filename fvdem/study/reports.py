@@ -3,13 +3,12 @@ folders (``report``), the compact archive of a study folder (``archive``) and it
 (``results``).
 
 The runner and the tasks know nothing of what a run measures; a report does. It says which values of a
-run's summary ``study.json`` keeps (``run_values``: seed 000's report keeps t95), the detail of a finished
-run's progress line (``headline``), what a run still in progress holds (``live``: from its time series),
-its table columns, its figures and its findings (``findings.json``), and what an archive keeps beyond the
-generic (time-series columns, summary keys, files). A study file names its report (``report = "..."``,
-``fvdem schema --registered`` lists them); ``"table"`` is the generic one and the default; published studies'
-reports are packages of their own (``fvdem.reports``, e.g. ``"mema2020"``). Adding one: docs/ARCHITECTURE.md,
-"Add a study figure or finding".
+run's summary ``study.json`` keeps (``run_values``), the detail of a finished run's progress line
+(``headline``), what a run still in progress holds (``live``: from its time series), its table columns, its
+figures and its findings (``findings.json``), and what an archive keeps beyond the generic (time-series
+columns, summary keys, files). A study file names its report (``report = "..."``, ``fvdem laws report`` lists
+them); ``"table"`` is the generic one and the default; published studies' reports are packages of their own
+(``fvdem.reports``). Adding one: docs/ARCHITECTURE.md, "How to add a study report".
 """
 from __future__ import annotations
 
@@ -21,12 +20,12 @@ from pathlib import Path
 from ..io.locks import LOCK_FILE
 from ..io.run_folder import write_text_atomic
 from ..provenance import processor_of
-from .records import ENDED, FAILED, IN_PROGRESS, NOT_PLANNED, entry_folder, read_series, simulated_so_far
+from .records import (Outcome, RunState, at_end, entry_folder, read_series, run_at_end, series_ahead,
+                      simulated_so_far, state_of)
 from .registry import DEFAULT_REPORT, REPORT_MODULES, REPORTS, StudyReport, register_report, report_for  # noqa: F401
 
 
 # --------------------------------------------------------------------------- the report of a study folder
-_series = read_series  # the name the engine's modules knew it by
 
 
 def _so_far(series, chosen: StudyReport) -> dict:
@@ -51,26 +50,16 @@ def report(out) -> list:
         summary = Path(r["folder"]) / "summary.json"
         data = json.loads(summary.read_text()) if summary.exists() else {}
         cost = data  # the summary as read: what the run's CPU seconds bought (its status is derived below)
-        series = _series(Path(r["folder"]))
+        series = read_series(Path(r["folder"]))
         if result.get("design"):
             series_of[r["name"]] = series  # the screening's responses at chosen times
-        if series is not None and (not data or data.get("stopped_early")
-                                   or float(series["time"][-1]) > float(data.get("simulated_time", 0.0)) + 1e-9):
-            # a run in progress: what its time series holds (the summary of an earlier stop, or of the end
-            # before its duration was raised, is stale)
-            if data and not data.get("stopped_early") and r["status"] not in IN_PROGRESS:
-                r = {**r, "status": "running"}
+        status = table_status(r, data, series)
+        if series_ahead(data, series):  # a run on its way: what its time series holds (its summary is stale)
             data = _so_far(series, chosen)
             r = {**r, **(chosen.run_values(data) if chosen.run_values else {})}
-        elif r.get("duration") and r["status"] in ENDED and not data.get("ended") and \
-                float(data.get("simulated_time") or 0.0) < r["duration"] * (1 - 1e-9):
-            r = {**r, "status": "pending"}  # reached the end it had before its duration was raised: more to run
-        elif r["status"] in IN_PROGRESS and data and not data.get("stopped_early") and (data.get("ended") or (
-                r.get("duration") and float(data.get("simulated_time") or 0.0) >= r["duration"] * (1 - 1e-9))):
-            r = {**r, "status": "finished"}  # its summary shows its end: the index was written before its result
-        if r.get("planned") is False and r["status"] not in ENDED:
-            r = {**r, "status": NOT_PLANNED}  # out of the study file before its end: listed, neither drawn nor counted
-        if r["status"] not in (FAILED, NOT_PLANNED) and (Path(r["folder"]) / "timeseries.csv").exists():
+        r = {**r, "status": status}
+        drawable = status.state not in (RunState.FAILED, RunState.NOT_PLANNED)
+        if drawable and (Path(r["folder"]) / "timeseries.csv").exists():
             drawn.append(r)  # the figures get each run with the status derived here (and its live values)
         row = {"name": r["name"], "family": r["family"], **r.get("point", {}), "status": r["status"]}
         if chosen.columns:
@@ -79,11 +68,11 @@ def report(out) -> list:
                     "duration": r.get("duration"),
                     "replica": r.get("replica") or int((re.search(r"_r(\d+)$", r["name"]) or [0, 1])[1])})
         rows.append(row)
-        if r["status"] in ENDED and r.get("planned") is not False:
+        if status.state is RunState.ENDED and r.get("planned") is not False:
             spent.append((r["family"], r.get("point", {}), cost))
     paths = list(chosen.figures(out, drawn)) if chosen.figures else []
     if chosen.table_figures:  # of the values the table and the findings count (the runs the study plans)
-        paths += chosen.table_figures(out, [row for row in rows if row["status"] != NOT_PLANNED])
+        paths += chosen.table_figures(out, [row for row in rows if row["status"] != Outcome.NOT_PLANNED])
     if result.get("design"):  # a designed study: the effects of its factors (``fvdem.study.screening``)
         from .screening import screening
         paths += screening(out, result["design"], rows, series_of)
@@ -96,7 +85,7 @@ def report(out) -> list:
     (out / COSTS_PAGE).write_text(costs_page(result.get("study"), costs))
     written = paths + [out / "table.csv", out / "table.json", out / COSTS_FILE, out / COSTS_PAGE]
     if chosen.findings:
-        planned = [row for row in rows if row["status"] != NOT_PLANNED]
+        planned = [row for row in rows if row["status"] != Outcome.NOT_PLANNED]
         findings = chosen.findings(planned)
         (out / "findings.json").write_text(json.dumps(findings, indent=1) + "\n")
         plan = chosen.plan(planned, findings, result.get("study")) if chosen.plan else None
@@ -106,6 +95,26 @@ def report(out) -> list:
         (out / FINDINGS_PAGE).write_text(findings_page(result.get("study"), rows, findings, paths, plan))
         written += [out / "findings.json", out / FINDINGS_PAGE]
     return written
+
+
+def table_status(entry: dict, summary: dict, series) -> Outcome:
+    """A run's status in the table: the word its ``study.json`` entry has on record (``Outcome``), corrected by
+    what its folder holds, on the rules ``classify_run`` decides on (``at_end``, ``series_ahead``): "running"
+    where its time series has passed a summary that is not a stop's (its duration raised since, and on its way
+    again), "pending" where the record says ended but the summary is short of its duration (raised since: more to
+    run), "finished" where the record says on its way but the summary shows its end (the index was written before
+    its result); "not planned" where the study file no longer lists a run that has not ended."""
+    status = Outcome(entry["status"])
+    if series_ahead(summary, series):
+        if summary and not summary.get("stopped_early") and not status.state.on_the_way:
+            status = Outcome.RUNNING
+    elif status.state is RunState.ENDED and not at_end(summary, entry.get("duration")):
+        status = Outcome.PENDING
+    elif status.state.on_the_way and at_end(summary, entry.get("duration")):
+        status = Outcome.FINISHED
+    if entry.get("planned") is False and status.state is not RunState.ENDED:
+        status = Outcome.NOT_PLANNED  # out of the study file before its end: listed, neither drawn nor counted
+    return status
 
 
 FINDINGS_PAGE = "findings.md"  # the report's findings and figures as one page to read (``findings_page``)
@@ -217,15 +226,15 @@ def costs_page(study, costs: list) -> str:
 
 def _ran(rows: list) -> tuple[int, int, int]:
     """How many of the table's runs reached their end, how many others hold simulated time (on the way), and
-    how many the study plans (all but those ``NOT_PLANNED``)."""
-    rows = [r for r in rows if r["status"] != NOT_PLANNED]
-    ended = sum(r["status"] in ENDED for r in rows)
-    return ended, sum(r["status"] not in ENDED and (r.get("simulated_seconds") or 0) > 0 for r in rows), len(rows)
+    how many the study plans (all but those not planned)."""
+    rows = [r for r in rows if r["status"] != Outcome.NOT_PLANNED]
+    ended = [state_of(r["status"]) is RunState.ENDED for r in rows]
+    return sum(ended), sum(not e and (r.get("simulated_seconds") or 0) > 0 for e, r in zip(ended, rows)), len(rows)
 
 
 def _unplanned(rows: list) -> str:
     """", and N not planned (...)" where the table lists runs out of the study file that have not ended."""
-    n = sum(r["status"] == NOT_PLANNED for r in rows)
+    n = sum(r["status"] == Outcome.NOT_PLANNED for r in rows)
     return (f", and {n} not planned (out of the study file before their end: listed, neither counted nor drawn; "
             "fvdem study --supersede moves them to superseded/)") if n else ""
 
@@ -252,7 +261,7 @@ def archive(out, dest) -> list:
     """The compact results of a study folder's runs in ``dest`` (small enough to commit, e.g. under
     ``docs/data/``): per run its ``case.toml``, its time series thinned to ``time`` and its report's
     ``archived_columns`` (6 significant digits), its summary's ``ARCHIVED_SUMMARY`` and report keys, its
-    report's extra files (seed 000's: the void-fraction record) and its ``run.log``; plus the study's
+    report's extra files (``archive_extra``) and its ``run.log``; plus the study's
     ``study.json`` (folders relative to ``dest``) and ``study.toml``, and the report made from them. No
     checkpoints, states or VTU files. ``fvdem study DEST --report`` rebuilds the report and findings from
     ``dest`` alone. A run already in ``dest`` is replaced only by one that holds more simulated time, or moved
@@ -271,7 +280,7 @@ def archive(out, dest) -> list:
         if moved:
             runs.pop(r["name"], None)
             written.append(moved)
-        series = _series(folder)
+        series = read_series(folder)
         if series is None:  # listed without a folder (not started yet): the archive still counts every run
             runs.setdefault(r["name"], {**r, "folder": f"runs/{r['name']}", "simulated_seconds": 0.0})
             _refresh_duration(runs[r["name"]], r)
@@ -315,7 +324,7 @@ def archive(out, dest) -> list:
 
 
 def _design_series(index: dict) -> tuple:
-    """The time-series columns a designed study's responses read at chosen times (``mixing_entropy@3.0``): the
+    """The time-series columns a designed study's responses read at chosen times (``column@time``): the
     archive keeps them whatever its report keeps, so that the screening rebuilds from it."""
     responses = (index.get("design") or {}).get("responses", [])
     return tuple(r.split("@")[0] for r in responses if "@" in r)
@@ -370,7 +379,6 @@ def restore(study, source) -> list:
     from ..case import load_case
     from ..io.run_folder import physics_changes
     from ..provenance import describe, provenance
-    from .tasks import _finished
     source = Path(source)
     index = json.loads((source / "study.json").read_text())
     if index.get("study") != study.name:
@@ -391,7 +399,7 @@ def restore(study, source) -> list:
             outcomes.append((run.name, "exists"))
         elif changed:
             outcomes.append((run.name, f"case differs: {changed}"))
-        elif not _finished(held, case):
+        elif not run_at_end(held, case):
             outcomes.append((run.name, "in progress"))
         else:
             folder.parent.mkdir(parents=True, exist_ok=True)
@@ -417,7 +425,7 @@ def _bed_of(folder: Path) -> str | None:
 
 
 def results(out, dest) -> Path:
-    """The study's results as one JSON file ``dest`` (e.g. ``docs/data/mema2020.json``), rebuilt from the
+    """The study's results as one JSON file ``dest`` (e.g. under ``docs/data/``), rebuilt from the
     study folder or its archive (its report first): ``study``, ``file``, ``date``, ``code`` (the commits the
     runs ran with, short, and how many runs each), ``machine`` (hosts, their processors where recorded, threads,
     libraries of the runs),

@@ -15,11 +15,11 @@ from ..case import CaseError, load_case
 from ..io.locks import FolderLock
 from ..io.run_folder import write_text_atomic
 from .cluster import close_client, make_client, worker_count
+from .records import Outcome, ended_early, entry_folder, read_summary, run_at_end, simulated_so_far
 from .registry import report_for
-from .status import _clock, study_status
 from .specs import BedSpec, RunSpec, Study
-from .tasks import (FAILED, STOP_FILE, StudyStopped, _ended_early, _finished, _simulated_so_far, entry_folder,
-                    prepare_bed, run_finished, run_task)
+from .status import clock, study_status
+from .tasks import STOP_FILE, StudyStopped, prepare_bed, run_finished, run_task
 
 
 MAX_STALLS = 3  # paused attempts in a row that started and made no progress: the walltime is too short
@@ -55,9 +55,9 @@ def _guarded(function, item, threads):
     try:
         value = function(item, threads)
     except Exception as exc:  # noqa: BLE001  (one failed point is reported, the others go on)
-        return {"status": "failed", "error": f"{type(exc).__name__}: {exc}", "value": None,
+        return {"status": Outcome.FAILED, "error": f"{type(exc).__name__}: {exc}", "value": None,
                 "wall_seconds": time.perf_counter() - started}
-    return {"status": "finished", "error": None, "value": value, "wall_seconds": time.perf_counter() - started}
+    return {"status": Outcome.FINISHED, "error": None, "value": value, "wall_seconds": time.perf_counter() - started}
 
 
 def map_tasks(function, items, names, *, threads=1, scheduler=None, workers=None, cluster=None, log=print) -> list:
@@ -124,9 +124,9 @@ def _standing(run: RunSpec) -> tuple[bool, int]:
         case = load_case(run.case, {**run.overrides, "output.progress": False})
     except CaseError:
         return False, rank
-    so_far = _simulated_so_far(Path(run.folder))
+    so_far = simulated_so_far(Path(run.folder))
     steps_left = int(round(max(0.0, run.duration - so_far) / float(case.time.dem_step)))
-    finished = _finished(Path(run.folder), case)
+    finished = run_at_end(Path(run.folder), case)
     if so_far > 0 and not finished:
         return False, IN_PROGRESS_RANK - steps_left
     return finished, rank + steps_left
@@ -142,9 +142,9 @@ def _bed_priority(bed: BedSpec) -> int:
 
 def _expected_wall(out: Path, threads: int, status: dict | None = None) -> dict:
     """Each run's expected wall seconds to its end, by name: the simulated seconds it is likely to run yet
-    (``study_status``'s ``expected_left``: where its point's ended replicas ended, 2 s past its t95 once mixed,
-    else its duration) at its family's CPU seconds per simulated second so far (the slowest family's where its
-    own has none measured) over its ``threads`` (at one thread per run, as the campaign runs, its wall time; a
+    (``study_status``'s ``expected_left``: where its point's ended replicas ended, where a stop condition whose
+    mark it has reached ends it, else its duration) at its family's CPU seconds per simulated second so far (the
+    slowest family's where its own has none measured) over its ``threads`` (at one thread per run, as the campaign runs, its wall time; a
     lower bound where threads do not scale). Runs of a study that has measured no rate yet are missing."""
     return {r["name"]: r["expected_cpu_seconds_left"] / threads for r in (status or study_status(out))["runs"]
             if r["expected_cpu_seconds_left"] is not None}
@@ -154,7 +154,7 @@ def _bed_wall(beds, states: list, threads: int) -> dict:
     """Each of ``beds`` (``BedSpec``) not settled yet: its expected wall seconds to settle, by name: the mean CPU
     seconds of the settled beds among them of its case file (of all the settled ones where none of its case has
     settled), over ``threads``; ``states``: ``study_status``'s ``beds`` (a bed without a folder has not begun).
-    Missing where no bed has settled yet (a bed of the paper's study settles in 60-180 CPU s)."""
+    Missing where no bed has settled yet (the shipped cases' beds settle in 60-180 CPU s)."""
     state_of = {state["name"]: state for state in states}
     settled, waiting = {}, []
     for bed in beds:
@@ -242,9 +242,9 @@ class _StudyProgress:
         self.is_tqdm = not hasattr(self.bar, "step")
 
     def _simulated(self) -> float:
-        """Simulated seconds done: a run that ended early (mixed: ``time.stop_after_mixed``) counts whole."""
-        return sum(r.duration if _ended_early(Path(r.folder))
-                   else min(r.duration, _simulated_so_far(Path(r.folder), live=True)) for r in self.study.runs)
+        """Simulated seconds done: a run that ended early (a stop condition its case sets) counts whole."""
+        return sum(r.duration if ended_early(read_summary(Path(r.folder)))
+                   else min(r.duration, simulated_so_far(Path(r.folder), live=True)) for r in self.study.runs)
 
     def update(self, runs_done: int) -> None:
         now = self._simulated()
@@ -322,7 +322,7 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
     client, description = make_client(study.cluster, scheduler, workers, threads)
     log(f"{description}; Dask dashboard at {getattr(client, 'dashboard_link', None) or 'none'}")
     if until is not None:
-        log(f"stops at {_clock(until, 'seconds')} (--until), in {_hours_minutes(until - time.time())}; until then a "
+        log(f"stops at {clock(until, 'seconds')} (--until), in {_hours_minutes(until - time.time())}; until then a "
             "free worker takes first the runs expected to end by then")
     tag = task_tag(study, out)
     chosen = report_for(study.report)
@@ -360,8 +360,9 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
             ended, taken = queue.take(len(pending))
             if (out / STOP_FILE).exists():  # runs not started do not start; runs at their end still say so
                 for run in taken + queue.drain():
-                    results.append({"name": run.name, "family": run.family, "status": "stopped", "folder": run.folder,
-                                    "simulated_seconds": _simulated_so_far(Path(run.folder)), "point": run.point})
+                    results.append({"name": run.name, "family": run.family, "status": Outcome.STOPPED,
+                                    "folder": run.folder, "simulated_seconds": simulated_so_far(Path(run.folder)),
+                                    "point": run.point})
                 taken = []
             for run in ended + taken:
                 future = submit(run, f"{tag}run-{run.name}", ended=run in ended)
@@ -404,7 +405,7 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
         while pending or len(queue):
             if until is not None and not reached and time.time() >= until:
                 reached.append(time.time())
-                bar.message(f"--until {_clock(until, 'seconds')} reached: stopping; each running run checkpoints at "
+                bar.message(f"--until {clock(until, 'seconds')} reached: stopping; each running run checkpoints at "
                             "its next chunk; the same command continues the study")
                 request_stop(out)
             top_up()
@@ -422,19 +423,20 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
                     run = run_of[future.key]
                     name = run.name
                     stopped = isinstance(exc, StudyStopped) or (out / STOP_FILE).exists()
-                    result = {"name": name, "family": run.family, "status": "stopped" if stopped else FAILED,
+                    result = {"name": name, "family": run.family,
+                              "status": Outcome.STOPPED if stopped else Outcome.FAILED,
                               "folder": run.folder, "simulated_seconds": 0.0, "point": run.point,
                               **({} if stopped else {"error": f"{type(exc).__name__}: {exc}"})}
-                if result["status"] == "paused":
+                if result["status"] == Outcome.PAUSED:
                     retry = resubmit(run_of[future.key], result, future)
                     if retry is not None:
                         pending.add(retry)
                         write_index(out, study, [*results, result], description)
                         continue
                     if (out / STOP_FILE).exists():  # paused at its job's walltime as the study stops: its checkpoint
-                        result = {**result, "status": "stopped"}  # holds it, the next invocation continues it
+                        result = {**result, "status": Outcome.STOPPED}  # holds it, the next invocation continues it
                     else:
-                        result = {**result, "status": FAILED, "error": (
+                        result = {**result, "status": Outcome.FAILED, "error": (
                             f"paused {MAX_STALLS} times in a row at t = {result['simulated_seconds']:.6g} s without "
                             "a step: its job's walltime less stop_before_walltime leaves no time for one chunk of "
                             "it; raise the cluster's walltime or lower stop_before_walltime")}
@@ -456,7 +458,7 @@ def _run_study(study: Study, out: Path, scheduler, workers, threads, log, poll, 
     if (out / STOP_FILE).exists():
         summary["stopped"] = True
     if until is not None:
-        summary["until"] = _clock(until, "seconds")
+        summary["until"] = clock(until, "seconds")
         if reached:
             summary["until_reached"] = True
     write_text_atomic(out / "study.json", json.dumps(summary, indent=1) + "\n")
@@ -473,8 +475,8 @@ def task_tag(study: Study, out) -> str:
 
 
 def _pending(run: RunSpec) -> dict:
-    return {"name": run.name, "family": run.family, "status": "pending", "folder": run.folder, "point": run.point,
-            "simulated_seconds": _simulated_so_far(Path(run.folder))}
+    return {"name": run.name, "family": run.family, "status": Outcome.PENDING, "folder": run.folder,
+            "point": run.point, "simulated_seconds": simulated_so_far(Path(run.folder))}
 
 
 def _holds(out: Path, entry: dict) -> bool:
@@ -508,7 +510,7 @@ def write_index(out, study: Study, results=(), description: str | None = None) -
 
     def listed(run, result=None):  # the run's latest result (else pending) with what the study file says of it
         return {**unflagged(result or _pending(run)), "replica": run.replica, "duration": run.duration,
-                "physics": run.physics, "stop_after_mixed": run.stop_after_mixed, "priority": run.priority}
+                "physics": run.physics, **dict(run.stops), "priority": run.priority}
 
     # the index keeps the runs ``--only`` left out, and a run the study file no longer plans while its folder
     # holds something (nothing on disk goes unlisted), flagged ``"planned": false`` (``--status`` and the report

@@ -3,11 +3,11 @@ read from the study's table and time series, each factor's main effect and the r
 interactions with their confidence intervals (``fvdem.study.design.analyse``), as ``screening.json``, a page
 ``screening.md`` and a Pareto chart of the standardized effects per response (``pareto_<response>.png``).
 
-A response is a column of the study's table (its report's, e.g. ``t95`` or ``dense_bed_expansion``) or a
-time-series column at a simulated time (``mixing_entropy@3.0``: interpolated; a run that has not reached the
-time holds none yet). A response listed as ``censored`` (t95: a run that ended unmixed has none) takes the
-run's simulated end where the run ended without it, and says so: an effect with censored runs is a bound
-(the censored runs would have taken longer). Effects are computed once every design point holds the response
+A response is a column of the study's table (its report's, e.g. ``bed_expansion``) or a time-series column at a
+simulated time (``kinetic_energy@3.0``: interpolated; a run that has not reached the time holds none yet). A
+response listed as ``censored`` (a time a run may end before reaching: it holds none then) takes the run's
+simulated end where the run ended without it, and says so: an effect with censored runs is a bound (the censored
+runs would have taken longer). Effects are computed once every design point holds the response
 in at least one run; until then the page says how many points wait."""
 from __future__ import annotations
 
@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 
 from .design import analyse, two_level
+from .records import RunState, state_of
 
 SCREENING_FILE = "screening.json"
 SCREENING_PAGE = "screening.md"
-ENDED = ("finished", "resumed", "skipped")  # the run states of ``fvdem.study.tasks.ENDED``
 
 
 def response_value(response: str, row: dict, series, censored: bool):
@@ -39,7 +39,7 @@ def response_value(response: str, row: dict, series, censored: bool):
     value = row.get(response)
     if value is not None:
         return float(value), False
-    if censored and row.get("status") in ENDED and row.get("simulated_seconds"):
+    if censored and state_of(row.get("status")) is RunState.ENDED and row.get("simulated_seconds"):
         return float(row["simulated_seconds"]), True
     return None, False
 
@@ -137,8 +137,8 @@ def pareto_chart(path: Path, response: str, result: dict, letters: dict) -> Path
     confidence level (the effects beyond it are told from nothing); without an error term, |estimate|."""
     from scipy import stats
 
-    from ..analysis.plots import _pyplot, _save
-    plt = _pyplot()
+    from ..analysis.plots import pyplot, save_figure
+    plt = pyplot()
     effects = sorted(result["effects"], key=lambda e: -abs(e["t"] if e["t"] is not None else e["estimate"]))
     standardized = all(e["t"] is not None for e in effects)
     values = [abs(e["t"]) if standardized else abs(e["estimate"]) for e in effects]
@@ -156,7 +156,7 @@ def pareto_chart(path: Path, response: str, result: dict, letters: dict) -> Path
     censored = len(result["censored_runs"])
     ax.set_title(f"{response}: {result['runs']} runs" + (f", {censored} censored at their end" if censored else ""),
                  fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _number(x) -> str:
@@ -176,7 +176,7 @@ def screening_page(record: dict, figures: list) -> str:
     for name, f in d["factors"].items():
         aliases = ", ".join(d["aliases"].get(f["letter"], [])) or "none"
         lines.append(f"| {f['letter']} | {name} | `{_level(f['low'])}` | `{_level(f['high'])}` | {aliases} |")
-    ended = sum(r["status"] in ENDED for r in record["runs"])
+    ended = sum(state_of(r["status"]) is RunState.ENDED for r in record["runs"])
     lines += ["", f"{ended} of {len(record['runs'])} runs at their end. An effect is the mean at high less the "
               "mean at low; its interval is the design's confidence level (red in the chart where it excludes "
               "zero)."]

@@ -28,7 +28,7 @@ class RunSpec:
     report: str = DEFAULT_REPORT  # the study's report: which values of its summary the run's result carries
     physics: str = ""  # its case's physics_fingerprint (its bed's state aside): tells a folder of an older case
     priority: int = 0  # the queue's tier among runs not started, higher first (``priority`` of its family or point)
-    stop_after_mixed: float | None = None  # its case's time.stop_after_mixed (the index lists it for --status)
+    stops: tuple = ()  # its case's early-end settings, (index key, value) each: the index lists them for --status
 
 
 @dataclass(frozen=True)

@@ -1,12 +1,13 @@
 """Where a study stands (``fvdem study OUT --status``), read from its folder alone and without writing anything:
 whether a study runs there now (its folder's lock: who, where, since when), each run's state (ended, running
 now, in progress from a checkpoint, not started, failed), the simulated seconds it holds against its duration
-and its report's values (seed 000's: t95, the mixing entropy it reached), the CPU seconds per simulated second
+and its report's values (those it keeps of a run, and the time-series columns it watches), the CPU seconds per
+simulated second
 and peak memory each family has cost so far (and on which processors: where the study computes now on one its
 other runs did not, its rates are scaled to it), and what is left: simulated seconds and core-hours at those
 rates, at most (every run to its duration) and as expected (a run ends where the ended runs of its physics at its
-point would make it end, or ``time.stop_after_mixed`` past its t95 once it has mixed), the hours that makes at the
-runs running now, and the runs that wait at a lower priority.
+point would make it end, or where a stop condition whose mark it has reached ends it: ``fvdem.scenes.stops``), the
+hours that makes at the runs running now, and the runs that wait at a lower priority.
 Works on a study folder while its study runs (a few file reads per run), on a stopped one and on an archive of
 one (``fvdem study OUT --archive DEST``).
 """
@@ -20,15 +21,9 @@ from pathlib import Path
 from ..io.locks import describe_holder, holder
 from ..io.run_folder import CHECKPOINT, FINAL_STATE
 from ..provenance import UNRECORDED_CPU, processor_of
-from .records import (NOT_PLANNED, classify_run, entry_folder, folder_case, read_series, read_summary,
-                      simulated_so_far)
+from ..scenes.stops import STOP_CONDITIONS
+from .records import RunState, classify_run, entry_folder, folder_case, read_series, read_summary, simulated_so_far
 from .registry import report_for
-
-# a run's state in the status: at its end; a process writing it now; a checkpoint it resumes from; results
-# without a checkpoint (an archive's copy of a run in progress, a run stopped before its first checkpoint: it
-# starts again from t = 0); nothing yet; its last attempt failed (its cause in study.json); the study file no
-# longer lists it and it has not ended (its folder kept: ``write_index``; nothing left of it is counted)
-STATES = ("ended", "running", "in progress", "partial", "not started", "failed", NOT_PLANNED)
 
 
 def study_status(out) -> dict:
@@ -100,14 +95,14 @@ def study_status(out) -> dict:
         used = rates[r["family"]]
         r["expected_cpu_seconds_left"] = None if used is None else r["expected_left"] * used
         threads = r.pop("threads", None) or 1
-        if r["state"] == "running" and used is not None:
-            r["expected_end"] = _clock(now + r["expected_cpu_seconds_left"] / threads)
+        if r["state"] == RunState.RUNNING and used is not None:
+            r["expected_end"] = clock(now + r["expected_cpu_seconds_left"] / threads)
     for name, family in families.items():
         family["expected_left_simulated_seconds"] = sum(r["expected_left"] for r in runs if r["family"] == name)
         used = rates[name]
         family["expected_core_hours"] = (None if used is None
                                          else family["expected_left_simulated_seconds"] * used / 3600.0)
-    counts = {state: sum(row["state"] == state for row in runs) for state in STATES}
+    counts = {state.value: sum(row["state"] == state for row in runs) for state in RunState}
     left_hours = (None if any(f["left_core_hours"] is None for f in families.values())
                   else sum(f["left_core_hours"] for f in families.values()))
     expected_hours = (None if left_hours is None
@@ -117,7 +112,8 @@ def study_status(out) -> dict:
             "left_simulated_seconds": sum(row["left"] for row in runs), "left_core_hours": left_hours,
             "expected_left_simulated_seconds": sum(row["expected_left"] for row in runs),
             "expected_core_hours": expected_hours, "unmeasured": unmeasured,
-            "hours_at_running_now": (left_hours / counts["running"] if left_hours is not None and counts["running"]
+            "hours_at_running_now": (left_hours / counts[RunState.RUNNING] if left_hours is not None
+                                     and counts[RunState.RUNNING]
                                      else None),
             "processors": processors, "processor_now": now_on, "processor_factor": factor,
             "beds": [_bed_status(folder) for folder in sorted((out / "beds").glob("*")) if folder.is_dir()]}
@@ -147,7 +143,8 @@ def _processor_now(rows: list) -> str | None:
     """The processor the study computes on now: that of most of its running runs (their summaries, written at
     each checkpoint, name the machine of the segment that wrote them), else this process's (``cpu_model``: a
     study that runs here between runs); None where nothing names one."""
-    running = [m[2] for row, m in rows if row["state"] == "running" and m is not None and m[2] != UNRECORDED_CPU]
+    running = [m[2] for row, m in rows if row["state"] == RunState.RUNNING and m is not None
+               and m[2] != UNRECORDED_CPU]
     if running:
         return max(set(running), key=running.count)
     from ..provenance import cpu_model
@@ -196,48 +193,71 @@ def _kin_families(entries: list) -> dict:
 
 def _expect(runs: list, entries: list, folders: list) -> None:
     """Each run's ``expected_left``: the simulated seconds it is likely to run yet, where ``left`` is the most
-    (its duration). A run that has mixed and ends ``time.stop_after_mixed`` past its t95 ends there; one that has
-    not, where the ended runs of its physics at its point (its family's replicas, and the runs of another family
-    that differs in time settings alone: the index's ``physics``) would make it end on average: each mixed one's
-    t95 plus its own margin (the study file's, listed in the index), an unmixed one at its duration (one that ended
-    unmixed short of this run's duration, cut short, is left out); without a margin it runs to its duration. An
-    older index lists no margin: a run's case.toml tells it once it began; before, the run ends where its family's
-    ended replicas at its point did. Any other run ends at its duration."""
+    (its duration). A run ends where a stop condition its case sets ends it (``fvdem.scenes.stops``: one whose
+    ``mark`` the run's values hold, e.g. a margin past a time it has reached); where it has not reached the mark,
+    where the ended runs of its physics at its point (its family's replicas, and the runs of another family that
+    differs in time settings alone: the index's ``physics``) would make it end on average: each one that reached
+    the mark where the condition, at this run's own setting (the study file's, listed in the index), ends it, one
+    that did not at its duration (one that ended without it short of this run's duration, cut short, is left out);
+    without the setting it runs to its duration. An older index lists no setting: a run's case.toml tells it once it
+    began; before, the run ends where its family's ended replicas at its point did. Any other run ends at its
+    duration."""
     def point(r):
         return r["family"], json.dumps(r["point"], sort_keys=True)
 
+    expecting = [c for c in STOP_CONDITIONS.values() if c.index_key and c.mark]
     ended, siblings = {}, {}
     for r, entry in zip(runs, entries):
-        if r["state"] == "ended":
+        if r["state"] == RunState.ENDED:
             if entry.get("physics"):
-                ended.setdefault(entry["physics"], []).append((r.get("t95"), r["simulated_seconds"]))
+                ended.setdefault(entry["physics"], []).append(r)
             siblings.setdefault(point(r), []).append(r["simulated_seconds"])
     for r, entry, folder in zip(runs, entries, folders):
-        if r["state"] in ("ended", NOT_PLANNED) or r["duration"] is None:
+        if r["state"] in (RunState.ENDED, RunState.NOT_PLANNED) or r["duration"] is None:
             r["expected_left"] = r["left"]
             continue
-        end = r["duration"]
-        if "stop_after_mixed" in entry:
-            known, stop = True, entry["stop_after_mixed"]
-        else:
-            case = folder_case(folder)
-            known, stop = case is not None, None if case is None else case.time.stop_after_mixed
-        # an unmixed run that ended before this one's duration (one cut short) bounds its t95 from below only
-        kin = [t95 for t95, held in ended.get(entry.get("physics"), ()) if t95 is not None or held >= end]
-        if not known:
+        duration = end = r["duration"]
+        settings = _stop_settings(entry, folder, expecting)
+        if settings is None:
             ends = siblings.get(point(r))
             end = min(end, sum(ends) / len(ends)) if ends else end
-        elif stop is None:
-            pass  # it runs to its duration, mixed or not
-        elif r.get("t95") is not None:
-            end = min(end, r["t95"] + stop)
-        elif kin:
-            end = sum(end if t95 is None else min(end, t95 + stop) for t95 in kin) / len(kin)
-        held = 0.0 if r["state"] == "partial" else r["simulated_seconds"]  # a partial run starts again
+        for condition, setting in (settings or {}).items():
+            if setting is None or setting is False:
+                continue  # it runs to its duration, whether it reaches the mark or not
+            own = condition.end_time(r, setting)
+            # a run that ended without the mark before this one's duration (one cut short) bounds nothing
+            kin = [k for k in ended.get(entry.get("physics"), ())
+                   if k.get(condition.mark) is not None or k["simulated_seconds"] >= duration]
+            if own is not None:
+                end = min(end, own)
+            elif kin:
+                end = min(end, sum(duration if condition.end_time(k, setting) is None
+                                   else min(duration, condition.end_time(k, setting)) for k in kin) / len(kin))
+        held = 0.0 if r["state"] == RunState.PARTIAL else r["simulated_seconds"]  # a partial run starts again
         r["expected_left"] = max(0.0, end - held)
 
 
-def _clock(epoch: float, timespec: str = "minutes") -> str:
+def _stop_settings(entry: dict, folder: Path, conditions: list) -> dict | None:
+    """Each of ``conditions``' setting for a run: as its index entry lists it (``index_key``), else as its folder's
+    case.toml sets it; None where neither tells (an older index, a run not begun)."""
+    settings, case = {}, None
+    for condition in conditions:
+        if condition.index_key in entry:
+            settings[condition] = entry[condition.index_key]
+            continue
+        case = case or folder_case(folder)
+        if case is None:
+            return None
+        settings[condition] = condition.setting_of(case)
+    return settings
+
+
+def _expected_ends() -> str:
+    """", or <how each stop condition ends a run>" for the status lines on expected ends."""
+    return "".join(f", or {c.expected}" for c in STOP_CONDITIONS.values() if c.expected)
+
+
+def clock(epoch: float, timespec: str = "minutes") -> str:
     """Local date and time of ``epoch`` (to the minute, or ``timespec``), ISO 8601 with its offset."""
     from datetime import datetime
     return datetime.fromtimestamp(epoch).astimezone().isoformat(timespec=timespec)
@@ -252,8 +272,8 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
     held = float(series["time"][-1]) if series is not None else float(summary.get("simulated_time") or 0.0)
     duration = r.get("duration")
     writer = holder(folder)
-    state = classify_run(folder, r, summary, series).value
-    if state == "ended":
+    state = classify_run(folder, r, summary, series)
+    if state == RunState.ENDED:
         values = chosen.run_values(summary) if chosen.run_values else {}
     elif series is not None and chosen.live and chosen.run_values:
         values = chosen.run_values(chosen.live(series))
@@ -262,13 +282,13 @@ def _run_status(out: Path, r: dict, chosen) -> tuple:
     watched = {c: float(series[c][-1]) for c in chosen.watch if series is not None and c in series}
     cpu, measured = summary.get("cpu_seconds"), float(summary.get("simulated_time") or 0.0)
     row = {"name": r["name"], "family": r["family"], "point": r.get("point", {}), "replica": r.get("replica"),
-           "priority": r.get("priority", 0), "state": state, "simulated_seconds": held, "duration": duration,
-           "left": (0.0 if state in ("ended", NOT_PLANNED) or duration is None
-                    else duration if state == "partial" else max(0.0, duration - held)),
+           "priority": r.get("priority", 0), "state": state.value, "simulated_seconds": held, "duration": duration,
+           "left": (0.0 if state in (RunState.ENDED, RunState.NOT_PLANNED) or duration is None
+                    else duration if state == RunState.PARTIAL else max(0.0, duration - held)),
            **values, **watched,
            "cpu_per_simulated_second": cpu / measured if cpu and measured > 0 else None,
            "peak_memory_mb": summary.get("peak_memory_mb"), "threads": summary.get("threads"),
-           **({"error": r.get("error")} if state == "failed" else {}),
+           **({"error": r.get("error")} if state == RunState.FAILED else {}),
            **({"writer": writer} if writer else {})}
     return row, ((float(cpu), measured, processor_of(summary)) if cpu and measured > 0 else None)
 
@@ -292,14 +312,14 @@ def format_status(status: dict) -> str:
         lines.append(f"{r['name']:<{width}}  {r['state']:<11}  {done:>13}  {values}"
                      f"{_cell(r['cpu_per_simulated_second'], '.0f'):>11}  {_cell(r['peak_memory_mb'], '.0f'):>7}")
     counts = status["counts"]
-    planned = [r for r in status["runs"] if r["state"] != NOT_PLANNED]
+    planned = [r for r in status["runs"] if r["state"] != RunState.NOT_PLANNED]
     total = sum(r["duration"] or r["simulated_seconds"] for r in planned)
     by_family = ", ".join(f"{name} {f['left_simulated_seconds']:.4g}" for name, f in status["families"].items()
                           if f["left_simulated_seconds"] > 0)
-    lines += ["", ", ".join(f"{n} {state}" for state, n in counts.items() if n and state != NOT_PLANNED)
+    lines += ["", ", ".join(f"{n} {state}" for state, n in counts.items() if n and state != RunState.NOT_PLANNED)
               + f" of {len(planned)} runs; {total - status['left_simulated_seconds']:.4g} of {total:.4g} simulated s "
               f"done, {status['left_simulated_seconds']:.4g} left" + (f" ({by_family})" if by_family else "")]
-    waiting = [r for r in planned if r["state"] == "not started"]
+    waiting = [r for r in planned if r["state"] == RunState.NOT_STARTED]
     top = max((r["priority"] for r in planned), default=0)
     later = {}
     for r in waiting:
@@ -308,8 +328,9 @@ def format_status(status: dict) -> str:
     for tier, runs in sorted(later.items(), reverse=True):
         lines.append(f"{len(runs)} of the runs not started wait at priority {tier} (the study file's), until every run "
                      f"of a higher priority has started: {', '.join(dict.fromkeys(r['family'] for r in runs))}")
-    if counts[NOT_PLANNED]:
-        lines.append(f"{counts[NOT_PLANNED]} run(s) not planned: the study file no longer lists them and they have not "
+    unplanned = counts[RunState.NOT_PLANNED]
+    if unplanned:
+        lines.append(f"{unplanned} run(s) not planned: the study file no longer lists them and they have not "
                      "ended; their folders are kept and not counted (fvdem study STUDY.toml --out "
                      f"{status['folder']} --supersede moves them to superseded/)")
     lines.append("CPU s per simulated s so far: " + "; ".join(
@@ -339,9 +360,9 @@ def format_status(status: dict) -> str:
         if borrowed:
             line += f" ({', '.join(borrowed)}: the same physics, none measured yet)"
         if status["hours_at_running_now"] is not None:
-            line += f", {status['hours_at_running_now']:.1f} h at the {counts['running']} run(s) running now"
+            line += f", {status['hours_at_running_now']:.1f} h at the {counts[RunState.RUNNING]} run(s) running now"
         line += (f"; about {status['expected_core_hours']:.1f} core-hours if each run ends where its point's ended "
-                 "runs of its physics would, or time.stop_after_mixed past its t95 where it has mixed")
+                 f"runs of its physics would{_expected_ends()}")
         lines.append(line)
     elif status["left_simulated_seconds"] > 0:
         lines.append("left: no run has a measured rate yet")
@@ -354,9 +375,8 @@ def format_status(status: dict) -> str:
     ends = [f"{r['name']} about {r['expected_end'][11:16]}" for r in status["runs"] if r.get("expected_end")]
     if ends:
         lines.append("expected to end (at their family's CPU seconds per simulated s over the threads of their last "
-                     "run, where the ended runs of their physics at their point would make them end, or "
-                     "time.stop_after_mixed past t95): "
-                     + ", ".join(ends))
+                     f"run, where the ended runs of their physics at their point would make them end{_expected_ends()}"
+                     "): " + ", ".join(ends))
     return "\n".join(lines)
 
 

@@ -9,8 +9,9 @@ from pathlib import Path
 
 from ..case import CaseError, load_case, to_toml
 from ..io.run_folder import physics_fingerprint
-from .checks import (PRIORITY_SPAN, REPLICAS_SPAN, _did_you_mean, _integer, _priority_of, _problem,  # noqa: F401
-                     _replicas, _seconds, _table, read_toml)
+from ..scenes.stops import stop_settings
+from .checks import (PRIORITY_SPAN, REPLICAS_SPAN, did_you_mean, integer_in, priority_of, problem,  # noqa: F401
+                     replicas_of, seconds_of, table_of, read_toml)
 from .cluster import check_cluster
 from .designed import designed_runs
 from .registry import DEFAULT_REPORT, REPORTS, report_for
@@ -37,53 +38,53 @@ def study_from_table(table: dict, path, out) -> Study:
     path = Path(path)
     problems: list[str] = []
     for key in sorted(set(table) - STUDY_KEYS):
-        _problem(problems, key, table[key], f"unknown key{_did_you_mean(key, STUDY_KEYS)}; a study has "
+        problem(problems, key, table[key], f"unknown key{did_you_mean(key, STUDY_KEYS)}; a study has "
                  f"{', '.join(sorted(STUDY_KEYS))}")
     for key in ("name", "description"):
         if key in table and not isinstance(table[key], str):
-            _problem(problems, key, table[key], "a string")
+            problem(problems, key, table[key], "a string")
     name = table.get("name", path.stem)
-    report_for(None)  # the registered reports (seed 000's registers itself on first use)
+    report_for(None)  # the registered reports (the report packages register theirs on first use)
     report = table.get("report", DEFAULT_REPORT)
     if not isinstance(report, str) or report not in REPORTS:
-        _problem(problems, "report", report, f"a registered report{_did_you_mean(report, REPORTS)}: "
+        problem(problems, "report", report, f"a registered report{did_you_mean(report, REPORTS)}: "
                  f"{', '.join(sorted(REPORTS))}")
         report = DEFAULT_REPORT
     duration = table.get("duration")
-    _seconds(duration, "duration", problems)
-    replicas = _replicas(table, "replicas", 1, problems)
-    settings = _table(table, "settings", problems)
-    axes = _table(table, "axes", problems)
+    seconds_of(duration, "duration", problems)
+    replicas = replicas_of(table, "replicas", 1, problems)
+    settings = table_of(table, "settings", problems)
+    axes = table_of(table, "axes", problems)
     for key, values in axes.items():
         if not isinstance(values, list) or not values:
-            _problem(problems, f"axes.{key}", values, "a non-empty list of values")
+            problem(problems, f"axes.{key}", values, "a non-empty list of values")
     axes = {k: v for k, v in axes.items() if isinstance(v, list) and v}  # the others are reported
-    families = _table(table, "families", problems)
+    families = table_of(table, "families", problems)
     if not families and "design" not in table:
         problems.append("families: a study needs at least one family ([families.NAME] with case = ...) or a "
                         "[design]")
-    beds_table = _table(table, "beds", problems)
+    beds_table = table_of(table, "beds", problems)
     out = Path(out).resolve()  # run folders and bed states are read from other folders (the cases')
     base = path.parent
 
     def entry(kind, key, spec):  # key None: the table is ``kind`` itself ([design])
         where = kind if key is None else f"{kind}.{key}"
         if not isinstance(spec, dict) or "case" not in spec:
-            _problem(problems, f"{where}", spec, "a table with case = 'path of a case file'")
+            problem(problems, f"{where}", spec, "a table with case = 'path of a case file'")
             return None, {}
         if not isinstance(spec["case"], str) or not spec["case"].strip():
-            _problem(problems, f"{where}.case", spec["case"], "the path of a case file (a string)")
+            problem(problems, f"{where}.case", spec["case"], "the path of a case file (a string)")
             return None, {}
         allowed = {"families": FAMILY_KEYS, "beds": BED_KEYS}.get(kind, DESIGN_KEYS)
         for k in sorted(set(spec) - allowed):
-            _problem(problems, f"{where}.{k}", spec[k], f"unknown key{_did_you_mean(k, allowed)}; allowed: "
+            problem(problems, f"{where}.{k}", spec[k], f"unknown key{did_you_mean(k, allowed)}; allowed: "
                      + ", ".join(sorted(allowed)))
         case_path = (base / spec["case"]).resolve()
         if not case_path.is_file():
-            _problem(problems, f"{where}.case", spec["case"], f"no such case file ({case_path})")
+            problem(problems, f"{where}.case", spec["case"], f"no such case file ({case_path})")
         sets = spec.get("set", {})
         if not isinstance(sets, dict):
-            _problem(problems, f"{where}.set", sets, "a table of case keys and values")
+            problem(problems, f"{where}.set", sets, "a table of case keys and values")
             sets = {}
         return str(case_path), sets
 
@@ -109,7 +110,7 @@ def study_from_table(table: dict, path, out) -> Study:
                 seed = 1  # the bed's own problems are reported below
             name = f"{bed_name}_r{replica}"
             if name in bed_names:
-                _problem(problems, f"beds.{name}", "...", f"a bed name that replica {replica} of bed {bed_name} "
+                problem(problems, f"beds.{name}", "...", f"a bed name that replica {replica} of bed {bed_name} "
                          "needs for its own settled bed; rename it")
             overrides = {**first.overrides, "particles.insertion.seed": seed + replica - 1}
             beds.append(BedSpec(name, first.case, overrides, str(out / "beds" / name), replica))
@@ -129,15 +130,15 @@ def study_from_table(table: dict, path, out) -> Study:
             continue
         bed = spec.get("bed")
         if bed is not None and not isinstance(bed, str):
-            _problem(problems, f"families.{family}.bed", bed, "the name of one of the study's beds (a string)")
+            problem(problems, f"families.{family}.bed", bed, "the name of one of the study's beds (a string)")
             bed = None
         family_duration = spec.get("duration", duration)
-        if "duration" in spec and not _seconds(family_duration, f"families.{family}.duration", problems):
+        if "duration" in spec and not seconds_of(family_duration, f"families.{family}.duration", problems):
             family_duration = duration
         if bed is not None and bed not in bed_names:
-            _problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
-        family_replicas = _replicas(spec, f"families.{family}.replicas", replicas, problems)
-        family_priority = _priority_of(spec, f"families.{family}.priority", problems)
+            problem(problems, f"families.{family}.bed", bed, f"one of the study's beds: {', '.join(sorted(bed_names)) or 'none'}")
+        family_replicas = replicas_of(spec, f"families.{family}.replicas", replicas, problems)
+        family_priority = priority_of(spec, f"families.{family}.priority", problems)
         for values in itertools.product(*(axes[k] for k in names)) if names else [()]:
             point = dict(zip(names, values))
             if any(excluded(family, point) for excluded in exclusions):
@@ -167,26 +168,26 @@ def study_from_table(table: dict, path, out) -> Study:
         design_runs, design = designed_runs(table["design"], settings, duration, replicas, entry, bed_names, out,
                                             problems)
         if design is not None and design["name"] in families:
-            _problem(problems, "design.name", design["name"], "a name no family has (it names the design's runs)")
+            problem(problems, "design.name", design["name"], "a name no family has (it names the design's runs)")
         runs += [RunSpec(**{**spec, "report": report, "bed": replica_bed(spec["bed"], spec["replica"])
                             if spec["bed"] is not None else None}) for spec in design_runs]
     _check_names(runs, beds, problems)
-    cluster = _table(table, "cluster", problems)
+    cluster = table_of(table, "cluster", problems)
     check_cluster(cluster, problems)
     # every case is checked before anything runs (a bed's final state does not exist yet: not loaded)
-    checked = {}  # id(spec) -> (its physics fingerprint, its case's time.stop_after_mixed)
+    checked = {}  # id(spec) -> (its physics fingerprint, its case's early-end settings)
     for spec in list(beds) + runs:
         overrides = dict(spec.overrides)
         try:
             case = load_case(spec.case, overrides)
-            checked[id(spec)] = physics_fingerprint(to_toml(case), BED_STATE), case.time.stop_after_mixed
+            checked[id(spec)] = physics_fingerprint(to_toml(case), BED_STATE), stop_settings(case)
         except CaseError as exc:
             label = spec.name if SAFE_NAME.match(spec.name) else f"[{spec.name!r}]"  # refused above as well
             problems += [f"{label}: {p}" for p in exc.problems]
     if problems:
         raise CaseError(problems)
     beds = [replace(s, physics=checked[id(s)][0]) for s in beds]
-    runs = [replace(s, physics=checked[id(s)][0], stop_after_mixed=checked[id(s)][1]) for s in runs]
+    runs = [replace(s, physics=checked[id(s)][0], stops=checked[id(s)][1]) for s in runs]
     return Study(name, str(path), float(duration), tuple(beds), tuple(runs), cluster, report, design=design)
 
 
@@ -198,13 +199,13 @@ def _matches(key, wanted, value) -> bool:
 def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, problems) -> list:
     """The ``[[durations]]`` or ``[[points]]`` tables (``name``) as ``(match(family, point), {key: value})``: each
     gives the runs that match all its selectors (``family`` and axis keys, each a value or a list of values)
-    its values of ``keys``: ``duration`` (simulated seconds, e.g. the slow-mixing low velocities of a study run
+    its values of ``keys``: ``duration`` (simulated seconds, e.g. the slower points of a study run
     longer) and, in ``[[points]]``, ``replicas`` (e.g. a third replica where two lie within their spread) and
     ``priority`` (the queue's tier of those runs while not started, higher first: a later tranche at -1). A
     key that is neither a selector nor one of ``keys``, a family or axis value the study lacks, a table that
     sets none of ``keys`` and a wrong value are problems."""
     if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
-        _problem(problems, name, tables, f"a list of tables ([[{name}]] with {' and/or '.join(keys)} and the family "
+        problem(problems, name, tables, f"a list of tables ([[{name}]] with {' and/or '.join(keys)} and the family "
                  "and axis values of the runs it applies to)")
         return []
     out = []
@@ -212,16 +213,16 @@ def _point_tables(tables, name: str, keys: tuple, families: dict, axes: dict, pr
     for k, spec in enumerate(tables):
         where = f"{name}[{k}]"
         values, found = {}, len(problems)
-        if "duration" in spec and _seconds(spec["duration"], f"{where}.duration", problems):
+        if "duration" in spec and seconds_of(spec["duration"], f"{where}.duration", problems):
             values["duration"] = float(spec["duration"])
         if "replicas" in spec and "replicas" in keys:
-            values["replicas"] = _replicas(spec, f"{where}.replicas", 1, problems)
+            values["replicas"] = replicas_of(spec, f"{where}.replicas", 1, problems)
         if "priority" in spec and "priority" in keys:
-            values["priority"] = _priority_of(spec, f"{where}.priority", problems)
+            values["priority"] = priority_of(spec, f"{where}.priority", problems)
         selectors = {key: wanted for key, wanted in spec.items() if key not in keys}
         bad = len(problems) > found or not _selectors_known(selectors, where, families, axes, allowed, problems)
         if not bad and not values:
-            _problem(problems, where, spec, f"sets none of {', '.join(keys)}")
+            problem(problems, where, spec, f"sets none of {', '.join(keys)}")
             bad = True
         if not bad:
             out.append((_selecting(selectors), values))
@@ -236,11 +237,11 @@ def _selectors_known(selectors: dict, where: str, families: dict, axes: dict, al
     for key, wanted in selectors.items():
         known = list(families) if key == "family" else axes.get(key)
         if known is None:
-            _problem(problems, f"{where}.{key}", wanted, f"unknown key{_did_you_mean(key, allowed)}; allowed: "
+            problem(problems, f"{where}.{key}", wanted, f"unknown key{did_you_mean(key, allowed)}; allowed: "
                      + ", ".join(sorted(allowed)))
             good = False
         elif any(w not in known for w in (wanted if isinstance(wanted, list) else [wanted])):
-            _problem(problems, f"{where}.{key}", wanted, "one of the study's values or a list of them: "
+            problem(problems, f"{where}.{key}", wanted, "one of the study's values or a list of them: "
                      + ", ".join(map(str, known)))
             good = False
     return good
@@ -257,13 +258,13 @@ def _exclusions(tables, families: dict, axes: dict, problems) -> list:
     run. Keys are ``family`` and the axis keys, each a value or a list of values; a key or value the study
     lacks, and a table without keys (it would drop every run), are problems."""
     if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
-        _problem(problems, "exclude", tables, "a list of tables ([[exclude]] with family and axis values)")
+        problem(problems, "exclude", tables, "a list of tables ([[exclude]] with family and axis values)")
         return []
     out = []
     for k, spec in enumerate(tables):
         where = f"exclude[{k}]"
         if not spec:
-            _problem(problems, where, spec, "the family and/or axis values of the runs to leave out (an empty "
+            problem(problems, where, spec, "the family and/or axis values of the runs to leave out (an empty "
                      "table would leave out every run)")
         elif _selectors_known(spec, where, families, axes, {"family", *axes}, problems):
             out.append(_selecting(spec))

@@ -7,18 +7,14 @@ import json
 import time
 from pathlib import Path
 
-from ..case import CaseError, load_case
 from typing import TYPE_CHECKING
 
+from ..case import CaseError, load_case
 from .cluster import job_deadline
-from .records import (ENDED, FAILED, IN_PROGRESS, NOT_PLANNED, entry_folder, folder_case, last_time,  # noqa: F401
-                      read_summary, simulated_so_far)
+from .records import Outcome, run_at_end, simulated_so_far
 
 if TYPE_CHECKING:
     from .specs import BedSpec, RunSpec
-
-# the names the engine's modules knew these by
-_summary, _folder_case, _simulated_so_far, _last_time = read_summary, folder_case, simulated_so_far, last_time
 
 
 STOP_FILE = "STOP"  # in a study folder: running runs checkpoint and stop, queued ones do not start
@@ -28,20 +24,6 @@ STOP_FILE = "STOP"  # in a study folder: running runs checkpoint and stop, queue
 PAUSED_RETURN_DELAY = 2.0
 
 
-def _finished(folder: Path, case) -> bool:
-    """Whether a run folder's summary shows the run at its end under ``case``: its end time reached, or ended
-    early by a criterion the case still sets (settled; mixed ``time.stop_after_mixed`` ago, that margin not
-    raised since)."""
-    from ..scenes.observables import past_mixing
-    data = _summary(folder)
-    if data is None:
-        return False
-    t, ended = case.time, data.get("ended") or ("settled" if data.get("settled") else None)
-    return not data.get("stopped_early") and (
-        data["simulated_time"] >= t.end * (1 - 1e-9) or (ended == "settled" and t.stop_when_settled)
-        or (ended == "mixed" and past_mixing(data.get("t95"), t.stop_after_mixed, data["simulated_time"])))
-
-
 def run_finished(run: RunSpec) -> bool:
     """Whether a study's run is at its end under its case as the study now sets it (False where the case
     cannot be read: the study's own check names the cause)."""
@@ -49,13 +31,7 @@ def run_finished(run: RunSpec) -> bool:
         case = load_case(run.case, {**run.overrides, "output.progress": False})
     except CaseError:
         return False
-    return _finished(Path(run.folder), case)
-
-
-def _ended_early(folder: Path) -> bool:
-    """Whether a run ended before its end time by its case's own criterion (settled, mixed)."""
-    data = _summary(folder)
-    return data is not None and not data.get("stopped_early") and bool(data.get("ended"))
+    return run_at_end(Path(run.folder), case)
 
 
 def _study_stop_file(folder) -> Path:
@@ -71,23 +47,24 @@ def _simulate(case_path, overrides, folder, threads, deadline: float | None = No
     from ..simulation import Simulation
     folder = Path(folder)
     case = load_case(case_path, {**overrides, "output.progress": False})
-    if _finished(folder, case):
-        return {"status": "skipped", "summary": json.loads((folder / "summary.json").read_text())}
+    if run_at_end(folder, case):
+        return {"status": Outcome.SKIPPED, "summary": json.loads((folder / "summary.json").read_text())}
     stop_file = _study_stop_file(folder)
-    so_far = {"simulated_time": _simulated_so_far(folder), "stopped_early": True}
+    so_far = {"simulated_time": simulated_so_far(folder), "stopped_early": True}
     if stop_file.exists():
-        return {"status": "stopped", "summary": so_far}
+        return {"status": Outcome.STOPPED, "summary": so_far}
     if deadline is not None and time.time() >= deadline:
         # a job on its way out took the run: give it back (the study then retires this worker)
         time.sleep(PAUSED_RETURN_DELAY)
-        return {"status": "paused", "started": False, "summary": so_far}
+        return {"status": Outcome.PAUSED, "started": False, "summary": so_far}
     stop = _StopWhen(stop_file, deadline)
     resume = (folder / "checkpoint.npz").exists()
     summary = Simulation(case, folder, resume=resume, overwrite=not resume, threads=threads, progress=False,
                          stop_file=stop).run()
     if summary.get("stopped_early"):
-        return {"status": "paused" if stop.deadline_reached else "stopped", "started": True, "summary": summary}
-    return {"status": "resumed" if resume else "finished", "summary": summary}
+        return {"status": Outcome.PAUSED if stop.deadline_reached else Outcome.STOPPED, "started": True,
+                "summary": summary}
+    return {"status": Outcome.RESUMED if resume else Outcome.FINISHED, "summary": summary}
 
 
 class _StopWhen:
@@ -112,7 +89,7 @@ class _StopWhen:
 def prepare_bed(bed: BedSpec, threads: int) -> str:
     """A settled bed's final state (prepared once; the runs starting from it depend on this task)."""
     outcome = _simulate(bed.case, bed.overrides, bed.folder, threads)
-    if outcome["status"] == "stopped":
+    if outcome["status"] == Outcome.STOPPED:
         raise StudyStopped(f"bed {bed.name} stopped before it settled")
     return str(Path(bed.folder) / "final_state.npz")
 
@@ -133,18 +110,18 @@ def run_task(run: RunSpec, threads: int, bed_state: str | None = None) -> dict:
         outcome = _simulate(run.case, overrides, run.folder, threads, job_deadline())
     except Exception as exc:  # noqa: BLE001  (any failure of one run is reported, the others go on)
         from ..io.run_log import log_tail
-        return {"name": run.name, "family": run.family, "status": FAILED, "error": f"{type(exc).__name__}: {exc}",
-                "folder": run.folder, "simulated_seconds": 0.0, "point": run.point,
-                "wall_seconds": time.perf_counter() - started, "log_tail": log_tail(run.folder)}
+        return {"name": run.name, "family": run.family, "status": Outcome.FAILED,
+                "error": f"{type(exc).__name__}: {exc}", "folder": run.folder, "simulated_seconds": 0.0,
+                "point": run.point, "wall_seconds": time.perf_counter() - started, "log_tail": log_tail(run.folder)}
     summary = outcome["summary"]
     chosen = report_for(run.report)
     return {"name": run.name, "family": run.family, "status": outcome["status"],
             "folder": run.folder, "simulated_seconds": summary["simulated_time"], "point": run.point,
             **(chosen.run_values(summary) if chosen.run_values else {}),
-            **({"ended": summary["ended"]} if summary.get("ended") else {}),  # early, by its case: "mixed"
+            **({"ended": summary["ended"]} if summary.get("ended") else {}),  # early, by a stop condition
             "wall_seconds": time.perf_counter() - started,
             **({"started": outcome["started"], "worker": _worker_address()}
-               if outcome["status"] == "paused" else {})}
+               if outcome["status"] == Outcome.PAUSED else {})}
 
 
 def _worker_address() -> str | None:

@@ -1,22 +1,23 @@
 """The paper's findings read on the evidence the paper gives for them: the second set of rules of seed 000's
 report (issue 66), fixed on 2026-12-07, before the study's stage 3, and never to be replaced after seeing its
-numbers (a later reading may be added beside them). The first set (``fvdem.study.mema2020.check_findings``)
+numbers (a later reading may be added beside them). The first set (``rules.check_findings``)
 stays as it was and is reported beside this one: old and new verdicts side by side.
 
 Where the paper's evidence is an entropy curve (Figs. 2, 3, 9 a), a rule reads the curves: each run's mixing
 entropy averaged over ``WINDOW_TIMES`` (1-8 s after the start, every 0.5 s; a run that ended mixed before 8 s
 holds its last value there: the entropy of a mixed bed stays at its ceiling), compared between families with
 the replicas' spread; t95 is the second reading, where the first set reads it. Orders are told by Welch's t on
-the replicas' means (``mema2020._margin``: Student's t at 97.7 % one-sided for the Welch-Satterthwaite degrees
-of freedom); "alike" is the equivalence test of ``mema2020._alike`` (the difference with its t errors within
+the replicas' means (``spread.order_margin``: Student's t at 97.7 % one-sided for the Welch-Satterthwaite degrees
+of freedom); "alike" is the equivalence test of ``spread.told_alike`` (the difference with its t errors within
 10 % of the larger mean)."""
 from __future__ import annotations
 
 import math
 
-from .report import (ENDED, ENTROPY_TIMES, LATER_READINGS, _alike, _by_velocity, _compare, _critical,
-                       _expansion_runs, _margin, _margin_words, _sample_variance, _satterthwaite, _t95_runs,
-                       _tall_columns, _told_rows)
+from .families import by_velocity, expansion_runs, row_ended, t95_runs, tall_columns, told_rows
+from .rules import LATER_READINGS, compare
+from .spread import critical, margin_words, order_margin, sample_variance, satterthwaite, told_alike
+from .table import ENTROPY_TIMES
 
 FIXED = "2026-12-07"  # the date these rules were committed, before stage 3's first run
 LITTLE = 0.20  # "little change": every velocity's mean t95 at or above 2.3 Umf within this of the largest
@@ -30,27 +31,27 @@ def _order(a: list, b: list) -> str | None:
     """``"higher"`` / ``"lower"`` where ``a``'s mean lies above / below ``b``'s by more than t standard errors,
     ``"alike"`` where the equivalence test tells them alike, else None (more replicas would tell; also without a
     spread: one run a side tells nothing)."""
-    margin = _margin(a, b)
+    margin = order_margin(a, b)
     if margin is None:
         return None
     error, k = margin
     difference = _mean(a) - _mean(b)
     if abs(difference) > k * error:
         return "higher" if difference > 0 else "lower"
-    return "alike" if _alike(a, b) else None
+    return "alike" if told_alike(a, b) else None
 
 
 def _window(rows, family) -> dict:
     """``{U/Umf: [window mean entropy of each run that holds one]}`` of a family."""
     return {v: [x for x in values if x is not None]
-            for v, values in _by_velocity(rows, family, "mixing_entropy_window").items()}
+            for v, values in by_velocity(rows, family, "mixing_entropy_window").items()}
 
 
 def _curves(rows, family, v) -> dict:
     """The mean entropy at ``ENTROPY_TIMES`` of a family's runs at ``v`` (for the finding's numbers)."""
     out = {}
     for t in ENTROPY_TIMES:
-        values = [x for x in _by_velocity(rows, family, f"mixing_entropy_at_{t:g}").get(v, []) if x is not None]
+        values = [x for x in by_velocity(rows, family, f"mixing_entropy_at_{t:g}").get(v, []) if x is not None]
         out[f"{t:g} s"] = _mean(values) if values else None
     return out
 
@@ -88,7 +89,7 @@ def entropy_higher(rows, higher: str, lower: str, velocities: tuple, claim: str,
             told[v] = order == "higher"
     rule = (f"each run's mixing entropy averaged over 1-8 s (every 0.5 s; a run that ended mixed holds its last "
             f"value): the mean of {higher}'s replicas above {lower}'s by more than t standard errors "
-            f"({_margin_words()}) at each of {', '.join(f'{v:g}' for v in velocities)} Umf; told below, or alike "
+            f"({margin_words()}) at each of {', '.join(f'{v:g}' for v in velocities)} Umf; told below, or alike "
             "(the difference with t errors within 10 % of the larger), decides against")
     return _verdict(claim, told, untold, values, rule, paper)
 
@@ -99,9 +100,9 @@ def little_change(rows, family: str, paper: str) -> dict:
     mean: holds; the difference less its t errors beyond ``LITTLE``: does not hold; else open. A run not mixed by
     its end leaves its velocity unknown (open)."""
     claim = f"{family}: little change of t95 above about 2.3 Umf (second reading: one equivalence test)"
-    t = {v: x for v, x in _by_velocity(rows, family, "t95").items() if v >= 2.3 - 1e-9}
+    t = {v: x for v, x in by_velocity(rows, family, "t95").items() if v >= 2.3 - 1e-9}
     rule = (f"the largest difference between two velocities' mean t95 at or above 2.3 Umf, with t standard errors "
-            f"({_margin_words()}), within {100 * LITTLE:.0f} % of the larger mean: holds; beyond it by more than t "
+            f"({margin_words()}), within {100 * LITTLE:.0f} % of the larger mean: holds; beyond it by more than t "
             "errors: does not hold")
     if len(t) < 2:
         return _verdict(claim, {}, ["fewer than two velocities at or above 2.3 Umf"], {}, rule, paper)
@@ -109,7 +110,7 @@ def little_change(rows, family: str, paper: str) -> dict:
         return _verdict(claim, {}, ["a run not mixed by its end at or above 2.3 Umf"], {}, rule, paper)
     means = {v: _mean(x) for v, x in t.items()}
     hi, lo = max(means, key=means.get), min(means, key=means.get)
-    margin = _margin(t[hi], t[lo])
+    margin = order_margin(t[hi], t[lo])
     values = {f"{v:g}": {"mean": means[v], "runs": len(t[v])} for v in sorted(t)}
     if margin is None:
         return _verdict(claim, {}, ["no replicas: no spread"], values, rule, paper)
@@ -130,8 +131,8 @@ def dense_expansion(rows, paper: str) -> dict:
     its settled height: ``dense_bed_expansion``, what the snapshots of Figs. 5, 6 and 8 show as the bed) at every
     velocity both ran, told by the replicas' spread."""
     claim = "AR-4 beds expand more than AR-1 at the same U/Umf (second reading: the dense bed, Figs. 5-8)"
-    rows = [r for r in _expansion_runs(rows) if r["status"] in ENDED and r.get("dense_bed_expansion") is not None]
-    a, b = _by_velocity(rows, "ar4_mp", "dense_bed_expansion"), _by_velocity(rows, "ar1", "dense_bed_expansion")
+    rows = [r for r in expansion_runs(rows) if row_ended(r) and r.get("dense_bed_expansion") is not None]
+    a, b = by_velocity(rows, "ar4_mp", "dense_bed_expansion"), by_velocity(rows, "ar1", "dense_bed_expansion")
     told, untold, values = {}, [], {}
     for v in sorted(set(a) & set(b)):
         order = _order(a[v], b[v])
@@ -142,7 +143,7 @@ def dense_expansion(rows, paper: str) -> dict:
         else:
             told[v] = order == "higher"
     rule = ("mean dense-bed expansion (the height under 90 % of the particle centres over its settled value) of AR-4 "
-            f"MP above AR-1's by more than t standard errors ({_margin_words()}) at every velocity both ran; told "
+            f"MP above AR-1's by more than t standard errors ({margin_words()}) at every velocity both ran; told "
             "below, or alike, decides against")
     return _verdict(claim, told, untold, values, rule, paper)
 
@@ -171,7 +172,7 @@ def largest_change_first(rows, families: tuple, paper: str) -> dict:
             if error is None:
                 verdicts.append(None)
                 continue
-            k = _critical(df)
+            k = critical(df)
             verdicts.append(True if first - rise > k * error else False if rise - first > k * error else None)
         if False in verdicts:
             told[family] = False
@@ -180,7 +181,7 @@ def largest_change_first(rows, families: tuple, paper: str) -> dict:
         else:
             told[family] = True
     rule = ("in each family, the mean window entropy's rise from 1.6 to 1.7 Umf larger than each rise between later "
-            f"neighbouring velocities by more than t standard errors of their difference ({_margin_words()}); one "
+            f"neighbouring velocities by more than t standard errors of their difference ({margin_words()}); one "
             "later rise told larger decides against")
     return _verdict(claim, told, untold, values, rule, paper)
 
@@ -188,14 +189,14 @@ def largest_change_first(rows, families: tuple, paper: str) -> dict:
 def _rise_error(groups: list) -> tuple[float | None, float | None]:
     """The standard error of a difference of sums of independent group means (each group once; a group of one
     run borrows the largest sample variance of the others) and its Welch-Satterthwaite degrees of freedom."""
-    variances = [_sample_variance(g) if len(g) > 1 else None for g in groups]
+    variances = [sample_variance(g) if len(g) > 1 else None for g in groups]
     known = [v for v in variances if v]
     if not known:
         return None, None
     variances = [v if v else max(known) for v in variances]
     terms = [v / len(g) for v, g in zip(variances, groups)]
     dfs = [max(len(g) - 1, 1) for g in groups]
-    return math.sqrt(sum(terms)), _satterthwaite(terms, dfs)
+    return math.sqrt(sum(terms)), satterthwaite(terms, dfs)
 
 
 def larger_drop(rows, paper: str) -> dict:
@@ -204,11 +205,11 @@ def larger_drop(rows, paper: str) -> dict:
     larger for AR-1 by more than t standard errors of the difference of the falls."""
     claim = "AR-1's mixing time falls more than AR-4's from 1.6 to 2 Umf (Fig. 4)"
     rule = ("mean t95 at 1.6 Umf less at 2.0 Umf, AR-1's larger than AR-4 MP's by more than t standard errors of the "
-            f"difference ({_margin_words()}); a fall with unmixed runs at 1.6 Umf (counted at their end) is a lower "
+            f"difference ({margin_words()}); a fall with unmixed runs at 1.6 Umf (counted at their end) is a lower "
             "bound: it decides only where it passes the other fall so")
     falls, values, groups = {}, {}, []
     for family in ("ar1", "ar4_mp"):
-        t, ends = _by_velocity(rows, family, "t95"), _by_velocity(rows, family, "simulated_seconds")
+        t, ends = by_velocity(rows, family, "t95"), by_velocity(rows, family, "simulated_seconds")
         if 1.6 not in t or 2.0 not in t or None in t[2.0]:
             return _verdict(claim, {}, [f"{family}: needs mixed runs at 2.0 Umf and runs at 1.6 Umf"], values, rule,
                             paper)
@@ -223,7 +224,7 @@ def larger_drop(rows, paper: str) -> dict:
     error, df = _rise_error(groups)
     if error is None:
         return _verdict(claim, {}, ["no replicas: no spread"], values, rule, paper)
-    k = _critical(df)
+    k = critical(df)
     (a, a_bound), (b, b_bound) = falls["ar1"], falls["ar4_mp"]
     values["difference"] = {"seconds": a - b, "t errors": k * error}
     if a - b > k * error and not b_bound:
@@ -257,8 +258,8 @@ PAPER = {
 def second_readings(rows: list, whole: list) -> list:
     """The second set of findings from the study's table rows (the same runs the first set counts: ``rows`` its
     t95 rows, ``whole`` those of the bed expansion)."""
-    rows = _tall_columns(_told_rows(_t95_runs(rows)))[0]
-    mp_sp = _compare(rows, "ar4_mp", "ar4_sp", lambda v: v > 2.3 + 1e-9,
+    rows = tall_columns(told_rows(t95_runs(rows)))[0]
+    mp_sp = compare(rows, "ar4_mp", "ar4_sp", lambda v: v > 2.3 + 1e-9,
                      "AR-4 MP mixes faster than SP above 2.3 Umf (second reading: the paper's conclusion)")
     return [
         entropy_higher(rows, "ar4_mp", "ar1", (1.6, 1.7), "AR-4 (MP) mixes faster than AR-1 at 1.6 and 1.7 Umf "
@@ -269,7 +270,7 @@ def second_readings(rows: list, whole: list) -> list:
          "fixed": FIXED},
         little_change(rows, "ar1", PAPER["terminal"]),
         little_change(rows, "ar4_mp", PAPER["terminal"]),
-        dense_expansion(_tall_columns(_told_rows(whole))[0], PAPER["expansion"]),
+        dense_expansion(tall_columns(told_rows(whole))[0], PAPER["expansion"]),
         largest_change_first(rows, ("ar1", "ar4_mp", "ar4_sp"), PAPER["first_step"]),
         larger_drop(rows, PAPER["drop"]),
     ]
@@ -283,26 +284,26 @@ SHAPES = {"AR-1": ("ar1", "ar1_paper"), "AR-4 MP": ("ar4_mp", "ar4_mp_paper")}  
 
 def contact_settings(rows: list, velocity: float = 2.0) -> dict:
     """Whether fvdem's contact defaults (k_n 800 N/m, DEM step 5e-5 s, CFD step 5e-4 s: families ``ar1``,
-    ``ar4_mp`` and their ``_t95`` replicas) mix as the paper's own settings do (2e4 N/m, 1e-5 s, 1e-4 s:
+    ``ar4_mp`` and their ``t95_by_velocity`` replicas) mix as the paper's own settings do (2e4 N/m, 1e-5 s, 1e-4 s:
     ``ar1_paper``, ``ar4_mp_paper``), per shape at ``velocity``: t95 and the window entropy (1-8 s) each compared
     by Welch's t (``_order``). Told apart on either: "differ" (the defaults change the mixing: the study's
     defaults move to the cheapest settings that agree); alike on both (the equivalence test, 10 %): "agree" (the
     defaults stand); else "open" (more replicas at the paper's settings). The dense bed's expansion and the
     overlaps' 99th percentile are shown beside them, not judged. Fixed on 2026-12-07 before any run at the
     paper's settings had ended (issue 66, item 3)."""
-    rows = _t95_runs(rows)
+    rows = t95_runs(rows)
     out = {"rule": "per shape at 2.0 Umf: t95 and the mixing entropy averaged over 1-8 s of the runs at the paper's "
-                   f"settings against the defaults' replicas, each by Welch's t ({_margin_words()}); told apart on "
+                   f"settings against the defaults' replicas, each by Welch's t ({margin_words()}); told apart on "
                    "either: differ; alike on both (the difference with t errors within 10 % of the larger): agree; "
                    "else open", "fixed": FIXED, "shapes": {}}
     for shape, (defaults, paper) in SHAPES.items():
         entry = {}
         for key in ("t95", "mixing_entropy_window", "dense_bed_expansion", "overlap_p99", "overlap_max"):
-            a = [x for x in _by_velocity(rows, paper, key).get(velocity, []) if x is not None]
-            b = [x for x in _by_velocity(rows, defaults, key).get(velocity, []) if x is not None]
+            a = [x for x in by_velocity(rows, paper, key).get(velocity, []) if x is not None]
+            b = [x for x in by_velocity(rows, defaults, key).get(velocity, []) if x is not None]
             entry[key] = {"paper": _mean(a) if a else None, "defaults": _mean(b) if b else None,
                           "runs": [len(a), len(b)], "order": (_order(a, b) or "untold") if a and b else "no runs"}
-        unmixed = [x for x in _by_velocity(rows, paper, "t95").get(velocity, []) if x is None]
+        unmixed = [x for x in by_velocity(rows, paper, "t95").get(velocity, []) if x is None]
         judged = [entry["t95"]["order"], entry["mixing_entropy_window"]["order"]]
         if unmixed:
             verdict = "open"
