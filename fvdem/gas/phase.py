@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import warnings
-from time import perf_counter
 
 import numpy as np
 
@@ -101,14 +100,9 @@ class GasPhase:
             z.voidage, speed, z.particle_diameter, self.config.density, self.config.viscosity)
 
     def step(self) -> dict:
-        t0 = perf_counter()
-        inner = self.solver.timings.seconds["gas_momentum"] + self.solver.timings.seconds["gas_pressure"]
-        try:
+        """One CFD step; timed as ``gas_other`` less the solver's ``gas_momentum`` and ``gas_pressure``."""
+        with self.timings.phase("gas_other"):
             return self._step()
-        finally:
-            seconds = self.solver.timings.seconds
-            self.solver.timings.add("gas_other", perf_counter() - t0 - (seconds["gas_momentum"] + seconds["gas_pressure"]
-                                                                         - inner))
 
     def inlet_velocity_at(self, time: float) -> float:
         """The superficial inlet velocity [m/s] at ``time``: ``gas.inlet_velocity``, ramped linearly from 0
@@ -145,6 +139,47 @@ class GasPhase:
                           "gas.cfd_step", RuntimeWarning, stacklevel=2)
         return info
 
+    # ------------------------------------------------------------------ what the rest of fvdem reads
+    # (the scenes, monitors and writers; nothing outside fvdem/gas/ touches the solver)
+    @property
+    def timings(self):
+        """The ``fvdem.timing.Timings`` the steps add to (``gas_momentum``, ``gas_pressure``, ``gas_other``);
+        a ``Model`` sets the run's."""
+        return self.solver.timings
+
+    @timings.setter
+    def timings(self, timings) -> None:
+        self.solver.timings = timings
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Interstitial cell velocities [m/s] (C, 3), the momentum equation's (read-only outside the gas)."""
+        return self.solver.velocity
+
+    @property
+    def pressure(self) -> np.ndarray:
+        """Cell pressures [Pa] (C,) (read-only outside the gas)."""
+        return self.solver.pressure
+
+    @property
+    def voidage(self) -> np.ndarray:
+        """Cell voidage (gas volume fraction) of the last step (C,) (read-only outside the gas)."""
+        return self.solver.voidage
+
+    @property
+    def periodic(self) -> bool:
+        """Whether the box is periodic along every axis (no inlet, no outlet)."""
+        return bool(self.solver.periodic)
+
+    def max_speed(self) -> float:
+        """The largest cell speed [m/s]."""
+        return float(np.linalg.norm(self.solver.velocity, axis=1).max())
+
+    @property
+    def inlet_velocity(self) -> float:
+        """The superficial inlet velocity [m/s] the inlet holds now (``inlet_velocity_at``: the case's ramp)."""
+        return float(self.solver.inlet_velocity)
+
     # ------------------------------------------------------------------ observables
     def layer_height(self, height: float) -> float:
         """Height [m] of the cell-centre layer nearest to ``height``."""
@@ -161,7 +196,7 @@ class GasPhase:
         s = self.solver
         z = self.mesh.cell_centers[:, 2]
         first = self.plane_pressure(z.min())
-        diag = {"gas_max_speed": float(np.linalg.norm(s.velocity, axis=1).max()), "gas_inlet_pressure": first}
+        diag = {"gas_max_speed": self.max_speed(), "gas_inlet_pressure": first}
         if not s.periodic:
             # pressure drop from the inlet face (the face pressure the solver's gradient takes) to
             # the last cell layer, less the gas head: what the particles (and wall friction) hold up [Pa]
