@@ -97,3 +97,16 @@ def test_the_protocol_declares_everything_used_of_a_dem_outside_it():
     assert used, "no use of a DEM found: the scan is broken"
     undeclared = {k: v for k, v in used.items() if k not in MEMBERS}
     assert not undeclared, f"used of a DEM but not in DEMBackend: {undeclared}"
+
+
+def test_nobody_outside_the_gas_touches_its_solver():
+    """The scenes, monitors, writers, model and tools read the gas through ``GasPhase`` (velocity, pressure,
+    voidage, max_speed, periodic, timings, the inlet's schedule), never ``gas.solver``."""
+    offenders = []
+    for path in sorted([*PACKAGE.rglob("*.py"), *(ROOT / "tools").glob("*.py")]):
+        if path.parent.name == "gas" and path.parent.parent == PACKAGE:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr == "solver":
+                offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not offenders, offenders

@@ -7,6 +7,7 @@ import numpy as np
 
 from ..correlations import ergun_beta_per_solids
 from ..errors import SimulationError
+from .inlet import InletSchedule
 from .mesh import GasMesh
 from .solver import GasProperties, GasSolver
 
@@ -52,6 +53,8 @@ class GasPhase:
         self.returned_momentum = np.zeros((n, 3))
         self._body_force = np.asarray(g.body_force, float)
         self.inlet_ramp = float(g.inlet_ramp)
+        # the inlet velocity of each step: the start-up ramp, the full velocity, the steps (gas.inlet_*)
+        self.inlet = InletSchedule(g.inlet_velocity, g.inlet_ramp, g.inlet_steps, g.cfd_step)
         if self.inlet_ramp > 0.0:
             self.solver.set_inlet_velocity(0.0)
         self.mean_pressure_gradient = np.asarray(g.mean_pressure_gradient, float)
@@ -104,17 +107,11 @@ class GasPhase:
         with self.timings.phase("gas_other"):
             return self._step()
 
-    def inlet_velocity_at(self, time: float) -> float:
-        """The superficial inlet velocity [m/s] at ``time``: ``gas.inlet_velocity``, ramped linearly from 0
-        over ``gas.inlet_ramp``."""
-        if self.inlet_ramp <= 0.0:
-            return self.config.inlet_velocity
-        return self.config.inlet_velocity * min(1.0, time / self.inlet_ramp)
-
     def _step(self) -> dict:
         s = self.solver
-        if self.step_count * self.dt < self.inlet_ramp:  # the velocity at the end of the step (implicit)
-            s.set_inlet_velocity(self.inlet_velocity_at((self.step_count + 1) * self.dt))
+        inlet = self.inlet.change_before(self.step_count)  # the ramp (implicit: its value at the step's end), a step
+        if inlet is not None:
+            s.set_inlet_velocity(inlet)
         s.beta[:] = self.exchange_beta
         self._update_porous_zone()
         s.source[:] = (self._body_force + s.voidage[:, None] * self.mean_pressure_gradient + self.exchange_source
@@ -177,7 +174,7 @@ class GasPhase:
 
     @property
     def inlet_velocity(self) -> float:
-        """The superficial inlet velocity [m/s] the inlet holds now (``inlet_velocity_at``: the case's ramp)."""
+        """The superficial inlet velocity [m/s] the inlet holds now (``inlet``: the ramp and steps of the case)."""
         return float(self.solver.inlet_velocity)
 
     # ------------------------------------------------------------------ observables
@@ -248,7 +245,8 @@ class GasPhase:
         self.solver.restore(solver)
         if "gas.returned_momentum" in data:
             self.returned_momentum = np.array(data["gas.returned_momentum"], copy=True)
-        if self.inlet_ramp > 0.0:
+        if self.inlet.varies:
             # the inlet as the uninterrupted run left it: __init__ set it to 0 for the ramp's start, and
-            # the ramp only updates it while it lasts (a run resumed after its end kept no inflow at all)
-            self.solver.set_inlet_velocity(self.inlet_velocity_at(self.step_count * self.dt))
+            # the ramp and steps only update it where they change it (a run resumed after the ramp's end
+            # kept no inflow at all)
+            self.solver.set_inlet_velocity(self.inlet.after(self.step_count))
