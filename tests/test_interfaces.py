@@ -110,3 +110,10 @@ def test_nobody_outside_the_gas_touches_its_solver():
             if isinstance(node, ast.Attribute) and node.attr == "solver":
                 offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}")
     assert not offenders, offenders
+
+
+def test_the_tools_take_the_gas_properties_from_a_case():
+    """No tool writes the gas's density or viscosity down again: they come from a case (or the solver's)."""
+    for path in sorted((ROOT / "tools").glob("*.py")):
+        text = path.read_text()
+        assert "1.568e-5" not in text and "RHO, MU =" not in text, path.name
