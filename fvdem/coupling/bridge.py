@@ -32,6 +32,12 @@ Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
    per cent), so that gas plus particle momentum, the pending return included, changes by the
    external forces only, to round-off.
 
+The scheme is chosen once, from ``coupling.drag_treatment`` and ``particles.fixed``: ``SemiImplicitDrag``,
+``ExplicitDrag`` (moving or fixed particles) or ``FixedBed`` (semi-implicit, nothing moves: the particles receive
+``c u dt``), each an object with the three steps that differ (``closures``, ``exchange``, ``move``).
+``CouplingBridge.advance`` runs the phases in order, each timed under its name (``voidage_mapping``,
+``closures``, ``deposition``; the gas and the DEM time their own steps).
+
 Torque is not fed back to the gas (docs/equations.md §2). A sphere case evaluates no lift or torque.
 """
 from __future__ import annotations
@@ -164,7 +170,7 @@ class ExplicitDrag:
 
     def closures(self, bridge, at: AtParticles) -> None:
         at.explicit_drag = at.drag_coefficient[:, None] * at.slip
-        bridge._check_explicit_stability(at.drag_coefficient, bridge.dem.particles.mass)
+        bridge.check_explicit_stability(at.drag_coefficient, bridge.dem.particles.mass)
 
     def exchange(self, bridge, grid_map, at: AtParticles):
         exchanged = -at.explicit_drag
@@ -349,7 +355,7 @@ class CouplingBridge:
         self.last["over_packed_cells"] = over_packed
         return eps
 
-    def _check_explicit_stability(self, c, mass) -> None:
+    def check_explicit_stability(self, c, mass) -> None:
         """Explicit drag held over the CFD step diverges once ``dt > 2 m / c`` (forward Euler)."""
         if not len(c):
             return
