@@ -10,6 +10,8 @@ commit and in the new tree, then comparing::
     python tools/bit_identity.py --out /tmp/new.json
     python tools/bit_identity.py --compare /tmp/base.json /tmp/new.json      # exit 1 when anything differs
 
+``--quick --json`` records one case over five coupling intervals as one JSON line (the suite's smoke run).
+
 The tool only uses ``load_case``, ``Simulation`` and ``Model.state()``, which every commit since 0.2 has,
 so the same file runs against an older tree (keep its path outside that tree on ``PYTHONPATH``'s side:
 the base tree's ``fvdem`` must be the one imported). Arrays present in only one record (e.g. a state
@@ -57,7 +59,7 @@ def digest(array) -> str:
     return hashlib.sha256(str(array.dtype).encode() + str(array.shape).encode() + array.tobytes()).hexdigest()
 
 
-def record(names) -> dict:
+def record(names, quick: bool = False) -> dict:
     from fvdem import Simulation
     from fvdem.case import load_case
     import fvdem
@@ -69,6 +71,8 @@ def record(names) -> dict:
         sim = Simulation(case, progress=False)
         if duration is None:  # the suspension: a tenth of its viscous time scale's worth of steps
             duration = 20 * sim.time_step
+        if quick:  # a smoke test of the tool: a few coupling intervals
+            duration = 5 * sim.time_step
         sim.run(duration)
         state = sim.model.state()
         out[name] = {"steps": int(sim.step_count), "time": float(sim.time),
@@ -104,17 +108,21 @@ def main(argv=None) -> int:
     parser.add_argument("--out", help="write the record (JSON) here")
     parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=sorted(CASES))
     parser.add_argument("--compare", nargs=2, metavar=("BASE", "NEW"), help="compare two records; exit 1 if any differ")
+    parser.add_argument("--quick", action="store_true", help="one case for five coupling intervals (a smoke test)")
+    parser.add_argument("--json", action="store_true", help="print the record as one JSON line")
     args = parser.parse_args(argv)
     if args.compare:
         a, b = (json.loads(Path(p).read_text()) for p in args.compare)
         lines = compare(a, b)
         print("\n".join(lines))
         return 0 if lines[-1] == "IDENTICAL" else 1
-    result = record(args.cases)
+    result = record(["spheres_semi_implicit"] if args.quick else args.cases, args.quick)
     text = json.dumps(result, indent=1, sort_keys=True)
     if args.out:
         Path(args.out).write_text(text + "\n")
-    else:
+    if args.json:
+        print(json.dumps(result, sort_keys=True))
+    elif not args.out:
         print(text)
     return 0
 
