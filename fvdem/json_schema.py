@@ -50,6 +50,9 @@ def _value(meta: dict, live: bool) -> dict:
     if kind == "str":
         choices = _choices(meta) if (live or not meta.get("registry")) else None
         return {"type": "string", **({"enum": list(choices)} if choices else {})}
+    if kind == "schedule":  # [time, value] pairs
+        pair = [_number(dict(kind="float", unit="time", ge=0.0)), _number(dict(meta, kind="float"))]
+        return {"type": "array", "items": {"type": "array", "items": pair, "minItems": 2, "maxItems": 2}}
     item = _value(dict(meta, kind={"vec3": "float", "bool3": "bool", "int3": "int"}[kind]), live)
     return {"type": "array", "items": item, "minItems": 3, "maxItems": 3}
 

@@ -145,9 +145,9 @@ class Model:
         if self.dem is not None:
             self.dem.timings = self.timings
         if self.gas is not None:
-            self.gas.solver.timings = self.timings
+            self.gas.timings = self.timings
         if self.stepping == "coupled":  # before the gas restore: the bridge maps a start-up voidage
-            self.bridge = CouplingBridge(case, self.dem, self.gas)
+            self.bridge = CouplingBridge(case, self.dem, self.gas, self.timings)
             if state is not None:
                 self.bridge.restore(state)
         if state is not None and self.gas is not None:  # the last step's voidage, not a remapped one

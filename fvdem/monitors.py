@@ -69,7 +69,7 @@ class RunawayWatch:
         ref_rate, ref_rebuilds, ref_step = typical
         gas = ""
         if model.gas is not None:
-            speed = float(np.linalg.norm(model.gas.solver.velocity, axis=1).max())
+            speed = model.gas.max_speed()
             gas = f"; gas: largest speed {speed:.3g} m/s, Courant number {model.gas.courant_number():.3g}"
         particles = ""
         if model.dem is not None:
@@ -124,10 +124,10 @@ class RunawayWatch:
         interstitial speed in the densest packing (U / 0.3) and the fastest particle (``values``: the
         sample's, ``gas_max_speed`` and, with particles, ``max_speed``)."""
         gas = self.model.gas
-        if gas is None or gas.solver.periodic or gas.config.inlet_velocity <= 0:
+        if gas is None or gas.periodic or gas.inlet.maximum <= 0:
             return
         gas_max_speed = values["gas_max_speed"]
-        drive = max(gas.config.inlet_velocity / 0.3, values.get("max_speed", 0.0))
+        drive = max(gas.inlet.maximum / 0.3, values.get("max_speed", 0.0))
         if gas_max_speed > RUNAWAY_GAS_SPEED * drive:
             raise SimulationError(
                 f"the gas runs away at t = {self.model.time:.6g} s: largest cell speed {gas_max_speed:.3g} m/s, "

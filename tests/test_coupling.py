@@ -9,7 +9,7 @@ from scipy.optimize import brentq
 import fvdem
 from fvdem.case import CaseError, case_from_dict
 from fvdem.coupling import closures
-from fvdem.coupling.bridge import particle_response
+from fvdem.coupling.bridge import ExplicitDrag, FixedBed, SemiImplicitDrag, coupling_scheme, particle_response
 from fvdem.dem.particles import ParticleArrays, spherocylinder_volume
 from fvdem.dem.system import Box, ContactModel, DEMSystem, SimulationError
 
@@ -317,7 +317,7 @@ def test_explicit_drag_diverges_where_semi_implicit_stays_stable():
     dt = 5 * tau
     explicit = fvdem.Simulation(_periodic_single_particle(d, 40 * dt, dt, dt / 5, two_way=False,
                                                           drag_treatment="explicit"))
-    explicit.bridge._check_explicit_stability = lambda c, m: None  # watch it fail
+    explicit.bridge.check_explicit_stability = lambda c, m: None  # watch it fail
     speeds = []
     for _ in range(12):
         explicit.run(dt)
@@ -426,3 +426,10 @@ def test_a_one_way_coupled_run_writes_its_folder_from_the_first_sample(tmp_path)
     assert summary["simulated_time"] == pytest.approx(0.005) and len(rows) >= 3
     assert "over_packed_cells" in header
     assert float(rows[1].split(",")[header.index("over_packed_cells")]) == 0.0
+
+
+def test_the_coupling_scheme_is_chosen_once_from_the_drag_treatment_and_fixed_particles():
+    assert isinstance(coupling_scheme("semi-implicit", False), SemiImplicitDrag)
+    assert isinstance(coupling_scheme("semi-implicit", True), FixedBed)
+    assert coupling_scheme("explicit", False).moving and not coupling_scheme("explicit", True).moving
+    assert isinstance(coupling_scheme("explicit", True), ExplicitDrag)

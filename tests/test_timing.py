@@ -3,7 +3,10 @@ to no more than the run's wall time, and a resumed run continues the table."""
 import subprocess
 import sys
 
+import pytest
+
 import fvdem
+import fvdem.timing as timing
 from fvdem.case import case_from_dict
 from fvdem.timing import PHASES
 
@@ -49,3 +52,18 @@ def test_fvdem_run_prints_the_table(tmp_path):
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert "Loop time of" in result.stdout and "contact_forces" in result.stdout and "%total" in result.stdout
+
+
+def test_a_phase_counts_its_own_time_less_what_was_recorded_inside_it(monkeypatch):
+    """``with timings.phase(name)``: a phase opened inside another, or seconds added inside it (the DEM's own
+    timing), are not the outer phase's; an unknown phase is refused by name."""
+    clock = iter([0.0, 1.0, 4.0, 10.0])  # closures opens, deposition opens and closes, closures closes
+    monkeypatch.setattr(timing, "perf_counter", lambda: next(clock))
+    t = timing.Timings()
+    with t.phase("closures"):
+        with t.phase("deposition"):
+            t.add("integration", 0.5)  # recorded by a part that times itself
+    assert t.seconds["integration"] == 0.5 and t.seconds["deposition"] == 2.5 and t.seconds["closures"] == 7.0
+    assert sum(t.seconds.values()) == 10.0
+    with pytest.raises(KeyError, match="no timing phase 'gas'"):
+        t.phase("gas")

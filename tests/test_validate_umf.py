@@ -1,10 +1,14 @@
-"""tools/validate_umf.py: the Umf fit on synthetic defluidization curves (the ramp itself is a tool run)."""
+"""tools/validate_umf.py and its fits (``fvdem.analysis.defluidization``) on synthetic defluidization curves;
+the ramp's schedule as the case's inlet steps; a short ramp resumed bit for bit."""
 import json
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from fvdem.analysis.defluidization import defluidization_steps, fit_umf, hold_statistics
+from fvdem.analysis.plots import read_timeseries
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 import validate_umf as tool  # noqa: E402
@@ -22,7 +26,7 @@ def _ramp(a, b, weight, umf_exp, dips=()):
 def test_fit_recovers_the_intersection_of_an_ergun_branch_with_the_plateau():
     a, b, weight = 150.0, 400.0, 1600.0
     velocity, drop = _ramp(a, b, weight, 1.58)
-    plateau, umf, (fa, fb) = tool.fit_umf(velocity, drop, weight, 1.58)
+    plateau, umf, (fa, fb) = fit_umf(velocity, drop, weight, 1.58)
     exact = (-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b)
     assert plateau == pytest.approx(weight)
     assert (fa, fb) == pytest.approx((a, b), rel=1e-9)
@@ -32,7 +36,7 @@ def test_fit_recovers_the_intersection_of_an_ergun_branch_with_the_plateau():
 def test_a_slugging_dip_above_umf_is_not_taken_for_the_fixed_branch():
     a, b, weight = 150.0, 400.0, 1600.0
     velocity, drop = _ramp(a, b, weight, 1.58, dips=[(1, 0.72 * weight)])
-    plateau, umf, (fa, fb) = tool.fit_umf(velocity, drop, weight, 1.58)
+    plateau, umf, (fa, fb) = fit_umf(velocity, drop, weight, 1.58)
     exact = (-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b)
     assert (fa, fb) == pytest.approx((a, b), rel=1e-9)  # the dip at 1.7 Umf_exp is left out of the branch
     assert plateau < weight
@@ -45,12 +49,12 @@ def test_holds_whose_bed_touched_the_roof_are_left_out_of_the_plateau():
     a, b, weight = 150.0, 400.0, 1600.0
     velocity, drop = _ramp(a, b, weight, 1.58, dips=[(0, 1.9 * weight)])
     roof = [True] + [False] * (len(velocity) - 1)
-    plateau, umf, _ = tool.fit_umf(velocity, drop, weight, 1.58, roof)
+    plateau, umf, _ = fit_umf(velocity, drop, weight, 1.58, roof)
     assert plateau == pytest.approx(weight)
     assert umf == pytest.approx((-a + np.sqrt(a * a + 4 * b * weight)) / (2 * b), rel=1e-9)
-    assert tool.fit_umf(velocity, drop, weight, 1.58)[0] > 1.2 * weight  # unflagged, it moves the plateau
+    assert fit_umf(velocity, drop, weight, 1.58)[0] > 1.2 * weight  # unflagged, it moves the plateau
     everywhere = [True] * len(velocity)
-    assert tool.fit_umf(velocity, drop, weight, 1.58, everywhere)[0] == tool.fit_umf(velocity, drop, weight, 1.58)[0]
+    assert fit_umf(velocity, drop, weight, 1.58, everywhere)[0] == fit_umf(velocity, drop, weight, 1.58)[0]
 
 
 @pytest.mark.parametrize("width, particles, column", [(0.06, 2000, 0.51), (0.15, 32500, 1.05), (0.09, 4500, 0.51)])
@@ -66,7 +70,7 @@ def test_the_column_leaves_the_bed_room_to_rise(width, particles, column):
 def test_fixed_branch_coefficients_are_non_negative():
     velocity = np.array([3.0, 2.0, 1.0, 0.8, 0.6, 0.4])
     drop = np.array([1000.0, 1000.0, 700.0, 600.0, 480.0, 330.0])  # concave: an unconstrained b < 0
-    _, umf, (fa, fb) = tool.fit_umf(velocity, drop, 1000.0, 1.5)
+    _, umf, (fa, fb) = fit_umf(velocity, drop, 1000.0, 1.5)
     assert fa >= 0 and fb >= 0 and np.isfinite(umf)
 
 
@@ -149,7 +153,7 @@ def test_the_acceleration_correction_recovers_the_long_time_mean_from_a_fraction
                                 "vertical_momentum": mass * velocity,
                                 "wall_force_vertical": np.full_like(t, 0.03 * weight)})
     hold = 0.3  # the tool averages its second half: 0.15 s, 0.3 of a period
-    mean, std, top, corrected, walls = tool.hold_statistics(tmp_path, 0.8, hold, area)
+    mean, std, top, corrected, walls = hold_statistics(read_timeseries(tmp_path), 0.8, hold, tool.SAMPLE, area)
     exact = 0.97 * weight / area
     assert abs(mean - exact) > 0.05 * exact  # the raw mean of the window is off by the swing
     assert corrected == pytest.approx(exact, rel=1e-4)
@@ -158,5 +162,5 @@ def test_the_acceleration_correction_recovers_the_long_time_mean_from_a_fraction
     assert corrected == pytest.approx((weight - walls) / area, rel=1e-4)
     # without the momentum column (a time series of an older run) there is no correction
     _write_series(tmp_path, t, {"bed_pressure_drop": drop, "bed_top": np.full_like(t, 0.3)})
-    assert tool.hold_statistics(tmp_path, 0.8, hold, area)[3] is None
-    assert tool.hold_statistics(tmp_path, 0.8, hold)[0] == pytest.approx(mean)
+    assert hold_statistics(read_timeseries(tmp_path), 0.8, hold, tool.SAMPLE, area)[3] is None
+    assert hold_statistics(read_timeseries(tmp_path), 0.8, hold, tool.SAMPLE)[0] == pytest.approx(mean)

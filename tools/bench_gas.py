@@ -33,9 +33,10 @@ import numpy as np
 warnings.filterwarnings("ignore", category=DeprecationWarning)
 
 from fvdem.gas.mesh import GasMesh  # noqa: E402
-from fvdem.gas.solver import GasSolver  # noqa: E402
+from fvdem.gas.solver import GasProperties, GasSolver  # noqa: E402
 
 DT = 1e-4
+AIR = GasProperties()  # the solver's gas (a case's default)
 
 
 def bed_fields(mesh, t):
@@ -44,8 +45,8 @@ def bed_fields(mesh, t):
     wave = np.sin(2 * np.pi * (5.0 * t + 3.0 * z + 2.0 * x)) * np.cos(2 * np.pi * (4.0 * t + 2.5 * y))
     voidage = np.where(z < 0.3, 0.5 + 0.08 * wave, 1.0)
     solids = 1.0 - voidage
-    beta = np.where(z < 0.3, 150 * solids ** 2 * 1.568e-5 / (voidage * 5.3e-3 ** 2)
-                    + 1.75 * solids * 1.2 * 3.0 / 5.3e-3, 0.0)
+    beta = np.where(z < 0.3, 150 * solids ** 2 * AIR.viscosity / (voidage * 5.3e-3 ** 2)
+                    + 1.75 * solids * AIR.density * 3.0 / 5.3e-3, 0.0)
     return voidage, beta
 
 
@@ -88,7 +89,7 @@ def main() -> int:
     t0 = time.perf_counter()
     for _ in range(10):
         for c in range(3):
-            fast._momentum_system(c, fast.voidage / DT + fast.beta, fast.face_flux, 1.568e-5 * eps_face,
+            fast._momentum_system(c, fast.voidage / DT + fast.beta, fast.face_flux, AIR.viscosity * eps_face,
                                   np.zeros(mesh.face_count))
         fast._pressure_system(eps_face)
     assembly_ms = 1e3 * (time.perf_counter() - t0) / 10

@@ -59,7 +59,7 @@ def steady(case_path, overrides, duration):
 def layers(sim, top, model, axes, superficial):
     """Per cell layer below the bed top: voidage, measured -dp/dz, the uniform-bed closure's at that
     voidage, and the wall cells' over the interior cells' superficial velocity."""
-    mesh, s = sim.gas.mesh, sim.gas.solver
+    mesh, s = sim.gas.mesh, sim.gas
     nx, ny, nz = mesh.shape
     eps = np.asarray(s.voidage).reshape(nz, ny, nx)
     w = (np.asarray(s.voidage) * s.velocity[:, 2]).reshape(nz, ny, nx)  # superficial vertical velocity

@@ -126,7 +126,7 @@ def measure(case, spin, window, sample, entropy_times):
             drops.append(diag["bed_pressure_drop"])
             heights.append(float(sim.particles.position[:, 2].mean()))
             centres = sim.gas.mesh.cell_centers
-            voids.append(np.asarray(sim.gas.solver.voidage)[centres[:, 2] < 0.3].copy())
+            voids.append(np.asarray(sim.gas.voidage)[centres[:, 2] < 0.3].copy())
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     counts, _ = np.histogram(np.concatenate(voids), bins=20, range=(0.0, 1.0))
     return {"wall_seconds_per_simulated_second": wall / sim.time, "cpu_seconds_per_simulated_second": cpu / sim.time,

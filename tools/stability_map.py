@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fvdem.case import Case
 from fvdem.coupling import closures
 from fvdem.coupling.bridge import particle_response
 from fvdem.coupling.voidage import voidage
@@ -42,7 +43,7 @@ from fvdem.dem.particles import ParticleArrays
 from fvdem.dem.system import Box, ContactModel, DEMSystem, SimulationError
 from fvdem.gas.mesh import GasMesh
 
-RHO, MU = 1.2, 1.568e-5
+GAS = Case().gas  # the gas of every map: a case's default (air), as the cfd map's column has it
 
 
 # --------------------------------------------------------------------------- DEM step vs collision time
@@ -87,7 +88,8 @@ def drag_map(ratios, steps=200):
     m = 1442.0 * math.pi / 6 * d ** 3
 
     def coefficient(speed):
-        return float(closures.single_particle_drag_coefficient(np.array([[0, 0, max(speed, 1e-12)]]), 1.0, d, RHO, MU)[0])
+        slip = np.array([[0, 0, max(speed, 1e-12)]])
+        return float(closures.single_particle_drag_coefficient(slip, 1.0, d, GAS.density, GAS.viscosity)[0])
 
     v_t = m * 9.81 / coefficient(0.0)
     for _ in range(50):

@@ -13,7 +13,8 @@ averaged window owes it (``over_weight_acceleration_corrected``, from the partic
 ``hold_statistics``), and the plateau of those (``plateau_over_weight_acceleration_corrected``); what
 remains of the departure from W/A is the weight the walls carry (``walls_share_of_weight``, measured:
 side-wall friction and the distributor). The inlet rises linearly from 0 over the start
-(``--start``): a full-speed start lifts a packed bed as one plug.
+(``--start``): a full-speed start lifts a packed bed as one plug. Start and holds are the case's inlet schedule
+(``gas.inlet_ramp``, ``gas.inlet_steps``); the fits are ``fvdem.analysis.defluidization``'s.
 Umf is a property of particles and gas, so a shallower bed than the paper's may be used: the output
 says which bed was used (``--width 0.15 --particles 32500`` is the paper's own bed).
 
@@ -50,12 +51,14 @@ from pathlib import Path
 import numpy as np
 
 import fvdem
-from fvdem.scenes.observables import weight_per_area
 from fvdem.analysis.bed import bed_packing, uniform_bed_pressure_gradient, uniform_bed_umf
-from fvdem.dem.particles import spherocylinder_volume
+from fvdem.analysis.defluidization import FLUIDIZED_FROM, defluidization_steps, fit_umf, hold_statistics, plateau_of
+from fvdem.analysis.plots import read_timeseries
 from fvdem.case import case_from_dict
 from fvdem.coupling.closures import law_names, spherocylinder_shape, sphericities
 from fvdem.correlations import ergun_umf, quadratic_crossing, wen_yu_umf
+from fvdem.dem.particles import spherocylinder_volume
+from fvdem.scenes.observables import weight_per_area
 
 EXPERIMENT = {"sphere": 1.58, "spherocylinder": 1.7}
 
@@ -107,74 +110,7 @@ def reduced_bed_table(shape, closures, particles, threads, width=0.06, settings=
         "run": {"threads": threads}}
 
 
-def plateau_of(velocity, drop, umf_experiment, touched_roof=None):
-    """The mean of ``drop`` over the holds at and above 1.3 Umf,exp, less those where the bed touched
-    the roof (``touched_roof``, a flag per hold; all of them when every fluidized hold did)."""
-    velocity, drop = np.asarray(velocity), np.asarray(drop)
-    fluidized = velocity >= 1.3 * umf_experiment
-    if touched_roof is not None:
-        free = fluidized & ~np.asarray(touched_roof, bool)
-        if free.any():
-            fluidized = free
-    return float(drop[fluidized].mean())
-
-
-def fit_umf(velocity, drop, weight, umf_experiment, touched_roof=None):
-    """``(plateau, Umf, (a, b))``: the plateau is ``plateau_of`` the holds; Umf is where the fixed-bed
-    branch ``a U + b U^2`` meets it."""
-    velocity, drop = np.asarray(velocity), np.asarray(drop)
-    plateau = plateau_of(velocity, drop, umf_experiment, touched_roof)
-    # the fixed-bed branch: the lowest velocities up to the first point at 0.85 W/A (a slugging bed's
-    # short-hold average can dip below that at high velocity; it is not part of the branch)
-    order = np.argsort(velocity)
-    below = drop[order] < 0.85 * weight
-    count = len(below) if below.all() else int(np.argmin(below))
-    fixed = np.zeros(len(velocity), bool)
-    fixed[order[:count]] = True
-    if fixed.sum() >= 2:
-        from scipy.optimize import nnls  # Ergun's form: both coefficients non-negative
-        design = np.stack([velocity[fixed], velocity[fixed] ** 2], axis=1)
-        (a, b), _ = nnls(design, drop[fixed])
-    elif fixed.sum() == 1:
-        a, b = drop[fixed][0] / velocity[fixed][0], 0.0
-    else:
-        return plateau, None, (0.0, 0.0)
-    return plateau, quadratic_crossing(a, b, plateau), (float(a), float(b))
-
-
 SAMPLE = 5e-4  # s between pressure-drop samples of a hold (the ramp's time series interval)
-
-
-def hold_statistics(folder, end_time, hold, area=None):
-    """The bed pressure drop over the second half of the hold that ended at ``end_time`` [s], from the
-    ramp's time series (samples every ``SAMPLE`` s): its mean and standard deviation [Pa], the highest
-    bed top [m] (99 % of the particle tops below it) over the same samples, the mean corrected for
-    the bed's acceleration [Pa] (None without ``area`` or without the ``vertical_momentum`` column), and
-    the mean force the walls (distributor included) exert on the particles against gravity [N] (None
-    without the ``wall_force_vertical`` column).
-
-    The correction: the particles' momentum balance against gravity reads ``A dp = W - F_wall + dP/dt``
-    (``dp`` the bed pressure drop, ``W`` the weight, ``F_wall`` what the walls carry, ``P`` the
-    particles' upward momentum), so ``(1/T) int dp dt - (P(t1) - P(t0)) / (A T)`` has the long-time mean
-    of ``dp`` and none of the swing of a slugging bed caught mid-rise or mid-fall by a short window: a
-    control variate, exact in expectation, whose remainder is the walls' share ``-F_wall / A``."""
-    from fvdem.analysis.plots import read_timeseries
-    series = read_timeseries(folder)
-    t = series["time"]
-    steps = int(round(hold / SAMPLE))
-    first = end_time - hold + (steps // 2 + 1) * SAMPLE
-    window = (t >= first - 0.25 * SAMPLE) & (t <= end_time + 0.25 * SAMPLE)
-    values = series["bed_pressure_drop"][window]
-    corrected = None
-    momentum = series.get("vertical_momentum")
-    if area is not None and momentum is not None and window.sum() > 1 and np.all(np.isfinite(momentum[window])):
-        tw, mw = t[window], momentum[window]
-        span = float(tw[-1] - tw[0])
-        corrected = float(np.trapezoid(values, tw) / span - (mw[-1] - mw[0]) / (area * span))
-    walls = series.get("wall_force_vertical")
-    walls = None if walls is None or not np.all(np.isfinite(walls[window])) else float(np.mean(walls[window]))
-    return (float(np.mean(values)), float(np.std(values)), float(np.max(series["bed_top"][window])),
-            corrected, walls)
 
 
 def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
@@ -184,7 +120,7 @@ def _hold_entry(sim, folder, u, hold, weight, solid_volume, area):
     velocity (the CFD-DEM's own error, hold by hold). ``touched_roof``: the bed top came within a
     particle diameter of the roof during the averaged half of the hold (the roof then carries part of
     the bed, and the pressure drop is not the fluidized bed's)."""
-    drop, spread, top, corrected, walls = hold_statistics(folder, sim.time, hold, area)
+    drop, spread, top, corrected, walls = hold_statistics(read_timeseries(folder), sim.time, hold, SAMPLE, area)
     roof = float(sim.case.domain.upper[2])
     size = 2.0 * float((sim.particles.radius + sim.particles.half_length).max())
     hold_packing = packed_state(sim)
@@ -230,8 +166,17 @@ def ramp(spec, threads=None):
                               o["drag"])
     # checkpoints every 0.05 s and where run() ends (a stop); samples every SAMPLE s; no snapshots
     table["output"].update(timeseries_interval=SAMPLE, checkpoint_interval=0.05, vtk=False)
-    # the inlet rises linearly over the start: a full-speed start lifts the packed bed as one plug
-    table["gas"]["inlet_ramp"] = o["start"]
+    ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
+    if o["quick"]:
+        ratios = [2.0, 1.3, 1.0, 0.7, 0.4]
+    # the fluidized holds (at and above 1.3 Umf,exp: the plateau) may be longer: a slugging bed's
+    # pressure drop swings over ~0.5 s, so a 0.25 s hold averages a fraction of one swing
+    plateau_hold = o.get("plateau_hold") or o["hold"]
+    holds = [plateau_hold if ratio >= FLUIDIZED_FROM else o["hold"] for ratio in ratios]
+    # the inlet rises linearly over the start (a full-speed start lifts the packed bed as one plug), then
+    # steps down through the holds: the case's inlet schedule
+    steps, ends = defluidization_steps(o["start"], [ratio * umf_exp for ratio in ratios], holds)
+    table["gas"].update(inlet_ramp=o["start"], inlet_steps=[list(pair) for pair in steps])
     case = case_from_dict(table)
     folder = Path(o["out"]) / f"ramp_{tag}"
     progress_file = folder / "ramp.json"
@@ -242,13 +187,6 @@ def ramp(spec, threads=None):
     box = case.domain
     area = float(np.prod(np.asarray(box.upper[:2]) - np.asarray(box.lower[:2])))
     solid_volume = float(spherocylinder_volume(sim.particles.radius, sim.particles.half_length).sum())
-    ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
-    if o["quick"]:
-        ratios = [2.0, 1.3, 1.0, 0.7, 0.4]
-    # the fluidized holds (at and above 1.3 Umf,exp: the plateau) may be longer: a slugging bed's
-    # pressure drop swings over ~0.5 s, so a 0.25 s hold averages a fraction of one swing
-    plateau_hold = o.get("plateau_hold") or o["hold"]
-    holds = [plateau_hold if ratio >= 1.3 else o["hold"] for ratio in ratios]
     curve = json.loads(progress_file.read_text())["curve"] if resume else []
     if resume:
         print(f"{tag}: resumed at t = {sim.time:.4f} s after {len(curve)} of {len(ratios)} holds", flush=True)
@@ -258,13 +196,11 @@ def ramp(spec, threads=None):
         sim.run(o["start"] - sim.time)
         _stopped(sim, tag)
         progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
-    ends = o["start"] + np.cumsum(holds)
     for k in range(len(curve), len(ratios)):
         # a hold from its start, or its rest after a stop (a stop's checkpoint falls inside a hold; a
         # kill between a hold's end checkpoint and its record leaves nothing to run: the point is
-        # completed from the time series and the restored bed)
-        ratio, u = ratios[k], ratios[k] * umf_exp
-        sim.gas.solver.set_inlet_velocity(u)
+        # completed from the time series and the restored bed); the case's schedule sets the inlet
+        ratio, u = ratios[k], steps[k][1]
         if ends[k] - sim.time > 0.5 * SAMPLE:
             sim.run(ends[k] - sim.time)
             _stopped(sim, tag)
@@ -327,7 +263,8 @@ def ramp(spec, threads=None):
         "settings": o["settings"],
         "hold_seconds": o["hold"], "plateau_hold_seconds": plateau_hold,
         "column_height": float(case.domain.upper[2]), "inlet_ramp_seconds": o["start"],
-        "plateau_holds_touching_roof": sum(r for r, c in zip(roofed, curve) if c["velocity"] >= 1.3 * umf_exp), "curve": curve, "plot": str(png), "defluidized_state": str(state),
+        "plateau_holds_touching_roof": sum(r for r, c in zip(roofed, curve)
+                                           if c["velocity"] >= FLUIDIZED_FROM * umf_exp), "curve": curve, "plot": str(png), "defluidized_state": str(state),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
     }
 

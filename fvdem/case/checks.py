@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from ..coupling.closures import law
+from ..gas.inlet import step_of
 from .schema import Case
 
 
@@ -29,6 +30,7 @@ def _gas_checks(case: Case, problems: list) -> None:
                         "box (a walled column has its own pressure)")
     if all(periodic) and g.inlet_velocity > 0:
         problems.append(f"gas.inlet_velocity = {g.inlet_velocity:g}: a periodic box has no inlet")
+    _inlet_checks(case, problems)
     if case.particles.count > 0:
         ratio = g.cfd_step / case.time.dem_step
         if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
@@ -38,12 +40,13 @@ def _gas_checks(case: Case, problems: list) -> None:
     # diverge from an inlet Courant number of about 1.3 with PISO (tools/stability_map.py, cfd map): refuse
     # > 1; SIMPLE iterates each step to convergence and takes large (steady-state) steps
     spacing = min((hi - lo) / n for lo, hi, n in zip(case.domain.lower, case.domain.upper, g.cells))
-    courant = g.inlet_velocity * g.cfd_step / spacing
+    fastest = max([g.inlet_velocity, *(u for _, u in g.inlet_steps)])  # the inlet's largest velocity
+    courant = fastest * g.cfd_step / spacing
     if g.scheme == "piso" and courant > MAX_INLET_COURANT:
         problems.append(f"gas.cfd_step = {g.cfd_step:g}: the inlet Courant number U dt / dx = {courant:.3g} "
-                        f"(U {g.inlet_velocity:g} m/s, cell {spacing:.3g} m) exceeds {MAX_INLET_COURANT:g}; the gas "
+                        f"(U {fastest:g} m/s, cell {spacing:.3g} m) exceeds {MAX_INLET_COURANT:g}; the gas "
                         f"PISO solver diverges from about 1.3 (docs/speed-accuracy.md); use cfd_step <= "
-                        f"{MAX_INLET_COURANT * spacing / g.inlet_velocity:.3g} s")
+                        f"{MAX_INLET_COURANT * spacing / fastest:.3g} s")
     zone = g.porous_zone
     if zone.enabled and (zone.lower is None or zone.upper is None):
         problems.append("gas.porous_zone: lower and upper corners are required when enabled")
@@ -52,6 +55,24 @@ def _gas_checks(case: Case, problems: list) -> None:
                         "disable the porous zone or set coupling.enabled = false")
     if case.particles.count > 0 and case.coupling.enabled:
         _coupling_checks(case, problems)
+
+
+def _inlet_checks(case: Case, problems: list) -> None:
+    """``gas.inlet_steps``: a walled column's, after the start-up ramp, one CFD step each."""
+    g = case.gas
+    if not g.inlet_steps:
+        return
+    if all(case.domain.periodic):
+        problems.append("gas.inlet_steps: a periodic box has no inlet")
+    first_time = g.inlet_steps[0][0]
+    if first_time < g.inlet_ramp:
+        problems.append(f"gas.inlet_steps: the first step at {first_time:g} s falls inside the start-up ramp "
+                        f"(gas.inlet_ramp = {g.inlet_ramp:g} s)")
+    steps = [step_of(t, g.cfd_step) for t, _ in g.inlet_steps]
+    for (a, _), (b, _), step_a, step_b in zip(g.inlet_steps, g.inlet_steps[1:], steps, steps[1:]):
+        if step_a == step_b:
+            problems.append(f"gas.inlet_steps: the steps at {a:g} s and {b:g} s fall in one CFD step "
+                            f"(gas.cfd_step = {g.cfd_step:g} s)")
 
 
 def _coupling_checks(case: Case, problems: list) -> None:

@@ -101,7 +101,25 @@ def _convert(value, meta, path, problems):
         item_meta = dict(meta, kind={"vec3": "float", "bool3": "bool", "int3": "int"}[kind])
         items = [_convert(v, item_meta, f"{path}[{k}]", problems) for k, v in enumerate(value)]
         return None if any(v is None for v in items) else tuple(items)
+    if kind == "schedule":
+        return _schedule(value, meta, path, problems)
     raise AssertionError(kind)
+
+
+def _schedule(value, meta, path, problems):
+    """A list of ``[time, value]`` pairs: times [s] >= 0 and increasing, values by the field's rule (unit, range)."""
+    if not isinstance(value, (list, tuple)) or not all(isinstance(v, (list, tuple)) and len(v) == 2 for v in value):
+        problems.append(f"{path} = {value!r}: expected {_describe_rule(meta)}")
+        return None
+    time_meta = dict(kind="float", unit="time", ge=0.0)
+    pairs = [(_convert(t, time_meta, f"{path}[{k}][0]", problems),
+              _convert(v, dict(meta, kind="float"), f"{path}[{k}][1]", problems)) for k, (t, v) in enumerate(value)]
+    if any(t is None or v is None for t, v in pairs):
+        return None
+    if any(b[0] <= a[0] for a, b in zip(pairs, pairs[1:])):
+        problems.append(f"{path} = {value!r}: the times must increase")
+        return None
+    return tuple(pairs)
 
 
 def _key_path(path: str, key) -> str:

@@ -200,6 +200,11 @@ class GasConfig:
                                  "2.9 Umf); a 1 s ramp kept every particle off the roof there. It does not keep a "
                                  "fluidized bed from throwing particles up later: Mema et al.'s AR-4 beds at 2.9 Umf "
                                  "pinned 3 % of their rods at the 1.05 m outlet after the ramp (docs/validation.md)")
+    inlet_steps: tuple = spec((), kind="schedule", unit="velocity", ge=0.0,
+                              doc="after the start-up ramp: [time, velocity] pairs, the inlet velocity [m/s] set from "
+                                  "the CFD step starting at time [s] on and held until the next pair (times "
+                                  "increasing, a CFD step apart at least, none inside gas.inlet_ramp); e.g. a "
+                                  "defluidization ramp, velocity held at each value in turn (tools/validate_umf.py)")
     umf: float | None = spec(None, unit="velocity", gt=0.0, optional=True,
                              doc="minimum fluidization velocity [m/s] that u_over_umf refers to (Mema et al. (2020): "
                                  "1.58 m/s AR-1, 1.7 m/s AR-4)")
@@ -355,7 +360,9 @@ def _describe_rule(meta, live: bool = True) -> str:
     if _choices(meta):
         return "one of " + ", ".join(repr(c) for c in _choices(meta))
     kinds = {"float": "a number", "int": "an integer", "bool": "true or false", "str": "a string",
-             "vec3": "a list of 3 numbers", "bool3": "a list of 3 booleans", "int3": "a list of 3 integers"}
+             "vec3": "a list of 3 numbers", "bool3": "a list of 3 booleans", "int3": "a list of 3 integers",
+             "schedule": "a list of [time, value] pairs, times >= 0 increasing (in " + ", ".join(UNITS["time"])
+                         + "), values"}
     parts.append(kinds[meta["kind"]])
     for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
         if meta.get(key) is not None:

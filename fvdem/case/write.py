@@ -7,11 +7,12 @@ from dataclasses import fields
 from .schema import Case
 
 
-_SCALAR_ARRAY = re.compile(r"\[\n((?:    [^\n\"'\[\]]*,\n)+)\]")
+_SCALAR_ARRAY = re.compile(r"\[\n((?: +[^\n\"'\[\]]*,\n)+) *\]")
 
 
 def _dumps(table: dict) -> str:
-    """TOML by tomli-w, with arrays of numbers and booleans on one line (``upper = [0.15, 0.15, 1.05]``)."""
+    """TOML by tomli-w, with arrays of numbers and booleans on one line (``upper = [0.15, 0.15, 1.05]``; an array
+    of such arrays one per line)."""
     import tomli_w
     return _SCALAR_ARRAY.sub(lambda m: "[" + ", ".join(item.strip().rstrip(",") for item in m.group(1).splitlines())
                              + "]", tomli_w.dumps(table))
@@ -30,7 +31,12 @@ def case_as_dict(case) -> dict:
         value = getattr(case, f.name)
         if kind == "internal" or value is None:
             continue
-        table[f.name] = case_as_dict(value) if kind == "section" else list(value) if isinstance(value, tuple) else value
+        if kind == "section":
+            table[f.name] = case_as_dict(value)
+        elif kind == "schedule":
+            table[f.name] = [list(pair) for pair in value]
+        else:
+            table[f.name] = list(value) if isinstance(value, tuple) else value
     return table
 
 

@@ -32,13 +32,18 @@ Per interval ``[t, t + dt]`` (``dt`` the CFD step, ``h = dt / n`` the DEM step):
    per cent), so that gas plus particle momentum, the pending return included, changes by the
    external forces only, to round-off.
 
+The scheme is chosen once, from ``coupling.drag_treatment`` and ``particles.fixed``: ``SemiImplicitDrag``,
+``ExplicitDrag`` (moving or fixed particles) or ``FixedBed`` (semi-implicit, nothing moves: the particles receive
+``c u dt``), each an object with the three steps that differ (``closures``, ``exchange``, ``move``).
+``CouplingBridge.advance`` runs the phases in order, each timed under its name (``voidage_mapping``,
+``closures``, ``deposition``; the gas and the DEM time their own steps).
+
 Torque is not fed back to the gas (docs/equations.md §2). A sphere case evaluates no lift or torque.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from time import perf_counter
 
 import numpy as np
 
@@ -115,14 +120,107 @@ def particle_response(mass, drag_coefficient, substep, substeps):
     return one_minus_r, k
 
 
-class CouplingBridge:
-    """Couples a ``DEMSystem`` and a ``GasPhase`` for one case (``case.coupling``)."""
+@dataclass
+class AtParticles:
+    """What the closures give each particle for one interval (rows in the particles' order at its start):
+    the slip ``u - v`` [m/s] (N, 3), the drag coefficient ``c`` [kg/s] (N,), the hydrodynamic torque [N m]
+    (N, 3) or None, the forces held over the interval on both sides ``held`` [N] (N, 3) (lift and the
+    stochastic fluctuation) or None, and, with the explicit scheme, the drag force held likewise [N] (N, 3)."""
 
-    def __init__(self, case, dem, gas):
+    slip: np.ndarray
+    drag_coefficient: np.ndarray
+    torque: np.ndarray | None
+    held: np.ndarray | None
+    explicit_drag: np.ndarray | None = None
+
+
+class SemiImplicitDrag:
+    """The drag implicit on both sides (``coupling.drag_treatment = "semi-implicit"``, moving particles): the
+    gas takes ``-beta u + S`` from the particles' response over the interval (``kernels.exchange_terms``), the
+    DEM's kicks integrate ``c (u - v)`` by backward Euler, and what they applied is balanced exactly."""
+
+    name = "semi-implicit"
+
+    def closures(self, bridge, at: AtParticles) -> None:
+        pass
+
+    def exchange(self, bridge, grid_map, at: AtParticles):
+        """``(beta, S)`` per cell [kg/s], [N] (summed, not yet per volume): response, coefficient, source
+        and their deposition in one kernel pass."""
+        p, cells = bridge.dem.particles, bridge.mesh.cell_count
+        return exchange_terms(p.mass, at.drag_coefficient, p.velocity, p.contact_force + p.external_force,
+                              np.asarray(bridge.dem.gravity, float), _NO_LIFT if at.held is None else at.held,
+                              bridge.dem.dt, bridge.substeps, bridge.cfd_step, grid_map.cells, grid_map.weights,
+                              grid_map.counts, np.zeros(cells), np.zeros((cells, 3)))
+
+    def move(self, bridge, inputs: CouplingInputs, at: AtParticles):
+        """The particles' steps of the interval; the drag impulse they received [N s] (N, 3)."""
+        return bridge.step_particles(inputs, at, at.drag_coefficient)
+
+
+class ExplicitDrag:
+    """The drag at the coupling time held over the interval on both sides (``coupling.drag_treatment =
+    "explicit"``; CFDEMcoupling's default, unstable for ``dt > 2 m / c``): what one side loses the other gains,
+    so nothing is returned. ``moving = False``: fixed particles (``particles.fixed``) take no steps."""
+
+    name = "explicit"
+
+    def __init__(self, moving: bool = True):
+        self.moving = moving
+
+    def closures(self, bridge, at: AtParticles) -> None:
+        at.explicit_drag = at.drag_coefficient[:, None] * at.slip
+        bridge.check_explicit_stability(at.drag_coefficient, bridge.dem.particles.mass)
+
+    def exchange(self, bridge, grid_map, at: AtParticles):
+        exchanged = -at.explicit_drag
+        return np.zeros(bridge.mesh.cell_count), grid_map.scatter(exchanged if at.held is None else exchanged - at.held)
+
+    def move(self, bridge, inputs: CouplingInputs, at: AtParticles):
+        """The particles' steps with the drag among the held forces; None: no impulse to balance."""
+        if self.moving:
+            bridge.step_particles(inputs, at, None)
+        return None
+
+
+class FixedBed:
+    """Fixed particles (``particles.fixed``) with the semi-implicit drag: the gas takes ``-beta u + S`` with
+    ``beta = sum c`` and the particles at rest; nothing moves, and the particles receive the drag at the new
+    gas velocity, ``c u dt``, which the exact exchange balances."""
+
+    name = "fixed bed"
+
+    def closures(self, bridge, at: AtParticles) -> None:
+        pass
+
+    def exchange(self, bridge, grid_map, at: AtParticles):
+        exchanged = np.zeros_like(at.slip)
+        return grid_map.scatter(at.drag_coefficient), grid_map.scatter(
+            exchanged if at.held is None else exchanged - at.held)
+
+    def move(self, bridge, inputs: CouplingInputs, at: AtParticles):
+        return at.drag_coefficient[:, None] * inputs.fluid_velocity * bridge.cfd_step
+
+
+def coupling_scheme(drag_treatment: str, fixed: bool):
+    """The scheme of ``coupling.drag_treatment`` for moving or fixed (``particles.fixed``) particles."""
+    if drag_treatment == "explicit":
+        return ExplicitDrag(moving=not fixed)
+    return FixedBed() if fixed else SemiImplicitDrag()
+
+
+class CouplingBridge:
+    """Couples a DEM (``dem.backends.DEMBackend``) and a ``GasPhase`` for one case (``case.coupling``); the
+    coupling scheme (``SemiImplicitDrag``, ``ExplicitDrag``, ``FixedBed``) is chosen once, here. ``timings``:
+    the run's (default: the DEM's)."""
+
+    def __init__(self, case, dem, gas, timings=None):
         self.config = cfg = case.coupling
         self.dem, self.gas = dem, gas
+        self.timings = dem.timings if timings is None else timings
         p = case.particles
         self.fixed = p.fixed
+        self.scheme = coupling_scheme(cfg.drag_treatment, p.fixed)
         self.model = HydrodynamicModel(cfg.drag, cfg.lift if p.shape != "sphere" else "none",
                                        cfg.torque if p.shape != "sphere" else "none", p.diameter,
                                        p.length if p.shape != "sphere" else p.diameter,
@@ -132,7 +230,6 @@ class CouplingBridge:
         # Stokes' rotational drag of the volume-equivalent sphere, 8 pi mu r^3 = pi mu d_e^3 [N m s]
         self._rotational_coefficient = np.pi * case.gas.viscosity * p.equivalent_diameter ** 3
         self.substeps = max(1, round(case.gas.cfd_step / case.time.dem_step))
-        self.semi_implicit = cfg.drag_treatment == "semi-implicit"
         # the drag fluctuation felt from the neighbours (``coupling.stochastic_force``; ``stochastic.py``)
         self.stochastic = None if cfg.stochastic_force == "none" or p.fixed else StochasticForce(
             cfg.stochastic_force, dem.particles.count, cfg.stochastic_seed, cfg.stochastic_scale,
@@ -146,7 +243,95 @@ class CouplingBridge:
         if cfg.two_way:
             gas.set_voidage(eps, previous=eps)
 
-    # ------------------------------------------------------------------ pieces
+    # ------------------------------------------------------------------ one interval
+    def advance(self) -> None:
+        """One CFD step of the gas and ``substeps`` DEM steps of the particles, coupled (the module
+        docstring's five phases). The gas and the DEM time their own steps."""
+        timings, two_way = self.timings, self.config.two_way
+        with timings.phase("voidage_mapping"):
+            grid_map, voidage = self._map_particles()
+        with timings.phase("closures"):
+            at = self._closures(grid_map, voidage)
+        if two_way:
+            with timings.phase("deposition"):
+                beta, source = self.scheme.exchange(self, grid_map, at)
+                self.gas.set_exchange(beta / self.mesh.cell_volumes, source / self.mesh.cell_volumes[:, None])
+        self.gas.step()
+        with timings.phase("closures"):
+            inputs, pressure_force = self._particle_inputs(grid_map, at)
+        impulse = self.scheme.move(self, inputs, at)  # in the particles' order of this interval
+        with timings.phase("deposition"):
+            returned = self._return_momentum(grid_map, impulse, at) if impulse is not None and two_way else 0.0
+        drag_force = (column_sums(at.explicit_drag) if impulse is None
+                      else column_sums(impulse) / self.cfd_step)
+        self.last.update(drag_force=drag_force, pressure_force=pressure_force, momentum_returned=returned)
+
+    # ------------------------------------------------------------------ its phases
+    def _map_particles(self):
+        """1. The particle-grid map of the interval and the cells' voidage, handed to the gas (two-way)."""
+        grid_map = self._grid_map()
+        voidage = self._voidage(grid_map)
+        if self.config.two_way:  # one-way coupling: the gas does not see the particles at all
+            self.gas.set_voidage(voidage)
+        return grid_map, voidage
+
+    def _closures(self, grid_map, voidage) -> AtParticles:
+        """2. Voidage and gas velocity at the particles (one pass over the weights), the slip, and the laws:
+        drag coefficient, lift, torque and the stochastic fluctuation."""
+        p = self.dem.particles
+        at_particles = grid_map.gather(np.column_stack([voidage, self.gas.flux_velocity()]))
+        n = p.count
+        eps_p, slip = slip_at_particles(at_particles, p.velocity, self.config.minimum_voidage, self.fixed,
+                                        np.empty(n), np.empty((n, 3)))
+        c, lift, torque = self.model.evaluate(slip, eps_p, p.axis)
+        held = lift  # the forces held over the interval on both sides: lift and the stochastic force
+        if self.stochastic is not None:
+            fluctuation = self.stochastic.force(p, slip, eps_p, c, self.cfd_step)
+            held = fluctuation if lift is None else lift + fluctuation
+            self.last["stochastic_force"] = fluctuation
+        at = AtParticles(slip, c, torque, held)
+        self.scheme.closures(self, at)
+        return at
+
+    def _particle_inputs(self, grid_map, at: AtParticles):
+        """4. The new gas velocity at the particles, and ``-V_p grad p`` (+ ``V_p G``, an imposed mean gradient
+        acting on both phases) + the held forces (+ the explicit drag), written into the bridge's buffers for
+        the DEM (one gather for both fields). Returns the inputs and the total pressure force [N] (3,)."""
+        cfg, gas, p = self.config, self.gas, self.dem.particles
+        fields = [gas.flux_velocity()] + ([gas.pressure_gradient()] if cfg.pressure_gradient_force else [])
+        at_particles = grid_map.gather(np.column_stack(fields))
+        inputs = self._inputs
+        if len(inputs.fluid_velocity) != p.count:
+            inputs = self._inputs = CouplingInputs.zeros(p.count)
+        pressure_force = particle_forces(at_particles, bool(cfg.pressure_gradient_force), p.radius, p.half_length,
+                                         np.asarray(gas.mean_pressure_gradient, float),
+                                         _NO_LIFT if at.held is None else at.held,
+                                         _NO_LIFT if at.explicit_drag is None else at.explicit_drag,
+                                         inputs.fluid_velocity, inputs.external_force)
+        return inputs, pressure_force
+
+    def step_particles(self, inputs: CouplingInputs, at: AtParticles, drag_coefficient):
+        """The DEM's ``substeps`` steps with the inputs, the torque (hydrodynamic, and Stokes' rotational drag
+        held exactly) and the drag coefficient of the kicks (None: no drag in the kicks). Returns the drag
+        impulse the kicks applied (N, 3), in the particles' order of the call."""
+        p = self.dem.particles
+        inputs.external_torque[:] = 0.0 if at.torque is None else at.torque
+        if self.rotational_drag:
+            inputs.external_torque += rotational_drag_torque(p.angular_velocity, p.inertia[:, 0],
+                                                             self._rotational_coefficient, self.cfd_step)
+        inputs.drag_coefficient = drag_coefficient
+        return self.dem.coupled_step(self.substeps, inputs)
+
+    def _return_momentum(self, grid_map, impulse, at: AtParticles) -> float:
+        """5. The exact exchange: the gas lost ``V (beta u - S) dt`` per cell (``u`` its momentum velocity), the
+        particles gained the drag ``impulse`` (with the flux velocity); the difference becomes a source of the
+        gas's next step. The held forces are explicit on both sides: not in the balance (one deposition of
+        both). Returns the largest component of the returned total [kg m/s]."""
+        lost = self.gas.exchange_lost(self.cfd_step)
+        difference = lost - grid_map.scatter(impulse if at.held is None else impulse + at.held * self.cfd_step)
+        self.gas.return_momentum(difference)  # a source of the next gas step
+        return float(np.abs(difference.sum(axis=0)).max())
+
     def _grid_map(self) -> ParticleGridMap:
         if self._map is None:
             self._map = ParticleGridMap(self.mesh, self.dem.particles, "trilinear", self.config.satellites)
@@ -170,104 +355,7 @@ class CouplingBridge:
         self.last["over_packed_cells"] = over_packed
         return eps
 
-    # ------------------------------------------------------------------ one interval
-    def advance(self) -> None:
-        """One CFD step of the gas and ``substeps`` DEM steps of the particles, coupled."""
-        dem, gas, cfg = self.dem, self.gas, self.config
-        p, mesh = dem.particles, self.mesh
-        dt = self.cfd_step
-        clock, timings = perf_counter, dem.timings
-        t_start = clock()
-        grid_map = self._grid_map()
-        eps = self._voidage(grid_map)
-        if cfg.two_way:  # one-way coupling: the gas does not see the particles at all
-            gas.set_voidage(eps)
-        t_mapped = clock()
-        deposited = 0.0
-
-        def scatter(values):  # the deposition phase: particle values to the cells
-            nonlocal deposited
-            t = clock()
-            out = grid_map.scatter(values)
-            deposited += clock() - t
-            return out
-        # voidage and gas velocity at the particles in one pass over the weights
-        at_particles = grid_map.gather(np.column_stack([eps, gas.flux_velocity()]))
-        n = p.count
-        eps_p, slip = slip_at_particles(at_particles, p.velocity, cfg.minimum_voidage, self.fixed, np.empty(n),
-                                        np.empty((n, 3)))
-        c, lift, torque = self.model.evaluate(slip, eps_p, p.axis)
-        held = lift  # the forces held over the interval on both sides: lift and the stochastic force
-        if self.stochastic is not None:
-            fluctuation = self.stochastic.force(p, slip, eps_p, c, dt)
-            held = fluctuation if lift is None else lift + fluctuation
-            self.last["stochastic_force"] = fluctuation
-        volume_cells = mesh.cell_volumes[:, None]
-        explicit_drag = None
-        if not self.semi_implicit:
-            explicit_drag = c[:, None] * slip
-            self._check_explicit_stability(c, p.mass)
-        if cfg.two_way:
-            if explicit_drag is not None or self.fixed:
-                beta = np.zeros(mesh.cell_count) if explicit_drag is not None else scatter(c)
-                exchanged = np.zeros_like(slip) if explicit_drag is None else -explicit_drag
-                source = scatter(exchanged if held is None else exchanged - held)
-            else:  # response, coefficient, source and their deposition in one kernel pass
-                t = clock()
-                beta, source = exchange_terms(p.mass, c, p.velocity, p.contact_force + p.external_force,
-                                              np.asarray(dem.gravity, float), _NO_LIFT if held is None else held,
-                                              dem.dt, self.substeps, dt, grid_map.cells, grid_map.weights,
-                                              grid_map.counts, np.zeros(mesh.cell_count),
-                                              np.zeros((mesh.cell_count, 3)))
-                deposited += clock() - t
-            gas.set_exchange(beta / mesh.cell_volumes, source / volume_cells)
-        t_gas = clock()
-        gas.step()
-        t_after_gas = clock()
-        fields = [gas.flux_velocity()] + ([gas.pressure_gradient()] if cfg.pressure_gradient_force else [])
-        at_particles = grid_map.gather(np.column_stack(fields))  # one pass for both
-        # u at the particles, and -V_p grad p (+ V_p G, an imposed mean gradient acting on both phases)
-        # + lift + explicit drag held over the interval, written into the bridge's buffers for the DEM
-        inputs = self._inputs
-        if len(inputs.fluid_velocity) != n:
-            inputs = self._inputs = CouplingInputs.zeros(n)
-        fluid_velocity, external = inputs.fluid_velocity, inputs.external_force
-        pressure_force = particle_forces(at_particles, bool(cfg.pressure_gradient_force), p.radius, p.half_length,
-                                         np.asarray(gas.mean_pressure_gradient, float),
-                                         _NO_LIFT if held is None else held,
-                                         _NO_LIFT if explicit_drag is None else explicit_drag, fluid_velocity, external)
-        if self.fixed:  # nothing moves: the particles receive the drag at the new gas velocity
-            impulse = None if explicit_drag is not None else c[:, None] * fluid_velocity * dt
-        else:
-            inputs.external_torque[:] = 0.0 if torque is None else torque
-            if self.rotational_drag:
-                inputs.external_torque += rotational_drag_torque(p.angular_velocity, p.inertia[:, 0],
-                                                                 self._rotational_coefficient, dt)
-            inputs.drag_coefficient = c if self.semi_implicit else None
-            t_dem = clock()
-            applied = dem.coupled_step(self.substeps, inputs)  # in the particles' order of this interval
-            t_after_gas += clock() - t_dem  # the DEM times itself
-            # explicit: the held force is what both sides exchanged; semi-implicit: what the kicks applied
-            impulse = None if explicit_drag is not None else applied
-        returned = 0.0
-        if impulse is not None and cfg.two_way:
-            # the gas lost V (beta u - S) dt per cell (u its momentum velocity); the particles gained
-            # the drag impulse the kicks applied (with the flux velocity): return the difference
-            lost = gas.exchange_lost(dt)
-            # the lift and the stochastic force are explicit on both sides: not in the balance (one deposition
-            # of both)
-            difference = lost - scatter(impulse if held is None else impulse + held * dt)
-            gas.return_momentum(difference)  # a source of the next gas step
-            returned = float(np.abs(difference.sum(axis=0)).max())
-        drag_force = column_sums(explicit_drag) if impulse is None else column_sums(impulse) / dt
-        self.last.update(drag_force=drag_force, pressure_force=pressure_force, momentum_returned=returned)
-        # closures: before the gas step and after it (interpolation, forces, exchange), less what
-        # the deposition and the DEM took
-        timings.add("voidage_mapping", t_mapped - t_start)
-        timings.add("closures", (t_gas - t_mapped) + (clock() - t_after_gas) - deposited)
-        timings.add("deposition", deposited)
-
-    def _check_explicit_stability(self, c, mass) -> None:
+    def check_explicit_stability(self, c, mass) -> None:
         """Explicit drag held over the CFD step diverges once ``dt > 2 m / c`` (forward Euler)."""
         if not len(c):
             return

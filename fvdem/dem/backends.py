@@ -18,7 +18,7 @@ touch of a DEM, and nothing else:
   with the run: phases ``neighbour_list``, ``contact_forces``, ``integration``).
 - ``state()`` / ``restore(data)``: every array needed to continue bit-for-bit (checkpoints).
 
-Add one: docs/ARCHITECTURE.md, "Add a DEM backend".
+Add one: docs/ARCHITECTURE.md, "How to add a DEM backend".
 """
 from __future__ import annotations
 
@@ -54,19 +54,36 @@ class CouplingInputs:
 
 @runtime_checkable
 class DEMBackend(Protocol):
-    """What fvdem uses of a DEM (see the module docstring)."""
+    """What fvdem uses of a DEM (see the module docstring): ``isinstance(system, DEMBackend)`` holds when every
+    member is there, and ``build_backend`` refuses a backend that lacks one (``missing_members``)."""
 
-    particles: object
-    dt: float
+    particles: object  # ParticleArrays, the host view
+    dt: float  # the DEM step [s]
+    gravity: np.ndarray  # (3,) [m/s^2]
+    box: object  # system.Box: lower, upper, periodic
+    timings: object  # fvdem.timing.Timings, the run's (set by the model)
     step_count: int
     rebuild_count: int
 
+    @property
+    def time(self) -> float: ...
     def step(self, steps: int = 1) -> None: ...
-    def coupled_step(self, steps: int, inputs: CouplingInputs): ...
+    def coupled_step(self, steps: int, inputs: CouplingInputs) -> np.ndarray: ...
     def diagnostics(self) -> dict: ...
     def check_health(self) -> None: ...
     def state(self) -> dict: ...
     def restore(self, data) -> None: ...
+
+
+# the protocol's members, read off the class (its annotated attributes, then its methods and properties)
+MEMBERS = tuple(dict.fromkeys([*DEMBackend.__annotations__, *(
+    name for name, value in vars(DEMBackend).items()
+    if not name.startswith("_") and (callable(value) or isinstance(value, property)))]))
+
+
+def missing_members(system) -> list:
+    """The members of ``DEMBackend`` that ``system`` lacks (empty: it meets the interface)."""
+    return [name for name in MEMBERS if not hasattr(system, name)]
 
 
 # name -> (factory(particles, box, contact, dt, gravity, skin) -> DEMBackend, one line on what it is)
@@ -89,7 +106,12 @@ def describe_backends() -> str:
 def build_backend(name: str, particles, box, contact, dt, gravity, skin) -> DEMBackend:
     """The DEM of backend ``name`` (a name ``run.dem_backend`` was checked against)."""
     factory, _ = BACKENDS[name]
-    return factory(particles, box, contact, dt, gravity, skin)
+    system = factory(particles, box, contact, dt, gravity, skin)
+    missing = missing_members(system)
+    if missing:
+        raise TypeError(f"DEM backend {name!r} ({type(system).__name__}) lacks {', '.join(missing)} of the "
+                        "interface fvdem uses (fvdem.dem.backends.DEMBackend)")
+    return system
 
 
 def _cpu(particles, box, contact, dt, gravity, skin):
@@ -99,5 +121,5 @@ def _cpu(particles, box, contact, dt, gravity, skin):
 
 register_backend("cpu", _cpu, "numba kernels on the host's cores (DEMSystem; struct-of-arrays, race-free blocks)")
 
-__all__ = ["CouplingInputs", "DEMBackend", "BACKENDS", "register_backend", "backend_names", "describe_backends",
+__all__ = ["CouplingInputs", "DEMBackend", "MEMBERS", "missing_members", "BACKENDS", "register_backend", "backend_names", "describe_backends",
            "build_backend"]

@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 import warnings
-from time import perf_counter
 
 import numpy as np
 
 from ..correlations import ergun_beta_per_solids
 from ..errors import SimulationError
+from .inlet import InletSchedule
 from .mesh import GasMesh
 from .solver import GasProperties, GasSolver
 
@@ -53,6 +53,8 @@ class GasPhase:
         self.returned_momentum = np.zeros((n, 3))
         self._body_force = np.asarray(g.body_force, float)
         self.inlet_ramp = float(g.inlet_ramp)
+        # the inlet velocity of each step: the start-up ramp, the full velocity, the steps (gas.inlet_*)
+        self.inlet = InletSchedule(g.inlet_velocity, g.inlet_ramp, g.inlet_steps, g.cfd_step)
         if self.inlet_ramp > 0.0:
             self.solver.set_inlet_velocity(0.0)
         self.mean_pressure_gradient = np.asarray(g.mean_pressure_gradient, float)
@@ -101,26 +103,15 @@ class GasPhase:
             z.voidage, speed, z.particle_diameter, self.config.density, self.config.viscosity)
 
     def step(self) -> dict:
-        t0 = perf_counter()
-        inner = self.solver.timings.seconds["gas_momentum"] + self.solver.timings.seconds["gas_pressure"]
-        try:
+        """One CFD step; timed as ``gas_other`` less the solver's ``gas_momentum`` and ``gas_pressure``."""
+        with self.timings.phase("gas_other"):
             return self._step()
-        finally:
-            seconds = self.solver.timings.seconds
-            self.solver.timings.add("gas_other", perf_counter() - t0 - (seconds["gas_momentum"] + seconds["gas_pressure"]
-                                                                         - inner))
-
-    def inlet_velocity_at(self, time: float) -> float:
-        """The superficial inlet velocity [m/s] at ``time``: ``gas.inlet_velocity``, ramped linearly from 0
-        over ``gas.inlet_ramp``."""
-        if self.inlet_ramp <= 0.0:
-            return self.config.inlet_velocity
-        return self.config.inlet_velocity * min(1.0, time / self.inlet_ramp)
 
     def _step(self) -> dict:
         s = self.solver
-        if self.step_count * self.dt < self.inlet_ramp:  # the velocity at the end of the step (implicit)
-            s.set_inlet_velocity(self.inlet_velocity_at((self.step_count + 1) * self.dt))
+        inlet = self.inlet.change_before(self.step_count)  # the ramp (implicit: its value at the step's end), a step
+        if inlet is not None:
+            s.set_inlet_velocity(inlet)
         s.beta[:] = self.exchange_beta
         self._update_porous_zone()
         s.source[:] = (self._body_force + s.voidage[:, None] * self.mean_pressure_gradient + self.exchange_source
@@ -145,6 +136,47 @@ class GasPhase:
                           "gas.cfd_step", RuntimeWarning, stacklevel=2)
         return info
 
+    # ------------------------------------------------------------------ what the rest of fvdem reads
+    # (the scenes, monitors and writers; nothing outside fvdem/gas/ touches the solver)
+    @property
+    def timings(self):
+        """The ``fvdem.timing.Timings`` the steps add to (``gas_momentum``, ``gas_pressure``, ``gas_other``);
+        a ``Model`` sets the run's."""
+        return self.solver.timings
+
+    @timings.setter
+    def timings(self, timings) -> None:
+        self.solver.timings = timings
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Interstitial cell velocities [m/s] (C, 3), the momentum equation's (read-only outside the gas)."""
+        return self.solver.velocity
+
+    @property
+    def pressure(self) -> np.ndarray:
+        """Cell pressures [Pa] (C,) (read-only outside the gas)."""
+        return self.solver.pressure
+
+    @property
+    def voidage(self) -> np.ndarray:
+        """Cell voidage (gas volume fraction) of the last step (C,) (read-only outside the gas)."""
+        return self.solver.voidage
+
+    @property
+    def periodic(self) -> bool:
+        """Whether the box is periodic along every axis (no inlet, no outlet)."""
+        return bool(self.solver.periodic)
+
+    def max_speed(self) -> float:
+        """The largest cell speed [m/s]."""
+        return float(np.linalg.norm(self.solver.velocity, axis=1).max())
+
+    @property
+    def inlet_velocity(self) -> float:
+        """The superficial inlet velocity [m/s] the inlet holds now (``inlet``: the ramp and steps of the case)."""
+        return float(self.solver.inlet_velocity)
+
     # ------------------------------------------------------------------ observables
     def layer_height(self, height: float) -> float:
         """Height [m] of the cell-centre layer nearest to ``height``."""
@@ -161,7 +193,7 @@ class GasPhase:
         s = self.solver
         z = self.mesh.cell_centers[:, 2]
         first = self.plane_pressure(z.min())
-        diag = {"gas_max_speed": float(np.linalg.norm(s.velocity, axis=1).max()), "gas_inlet_pressure": first}
+        diag = {"gas_max_speed": self.max_speed(), "gas_inlet_pressure": first}
         if not s.periodic:
             # pressure drop from the inlet face (the face pressure the solver's gradient takes) to
             # the last cell layer, less the gas head: what the particles (and wall friction) hold up [Pa]
@@ -213,7 +245,8 @@ class GasPhase:
         self.solver.restore(solver)
         if "gas.returned_momentum" in data:
             self.returned_momentum = np.array(data["gas.returned_momentum"], copy=True)
-        if self.inlet_ramp > 0.0:
+        if self.inlet.varies:
             # the inlet as the uninterrupted run left it: __init__ set it to 0 for the ramp's start, and
-            # the ramp only updates it while it lasts (a run resumed after its end kept no inflow at all)
-            self.solver.set_inlet_velocity(self.inlet_velocity_at(self.step_count * self.dt))
+            # the ramp and steps only update it where they change it (a run resumed after the ramp's end
+            # kept no inflow at all)
+            self.solver.set_inlet_velocity(self.inlet.after(self.step_count))

@@ -188,7 +188,7 @@ def write_snapshot(out: Path, model, entries: dict) -> None:
     if model.gas is not None:
         rows = entries.setdefault("gas", [])
         name = f"gas_{len(rows):05d}.vtu"
-        write_gas_vtu(out / name, model.gas.mesh, model.gas.solver)
+        write_gas_vtu(out / name, model.gas)
         rows.append((model.time, name))
         write_pvd(out / "gas.pvd", rows)
 

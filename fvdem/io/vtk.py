@@ -76,14 +76,15 @@ def gas_grid(mesh):
     return points, hexes
 
 
-def write_gas_vtu(path, mesh, solver) -> None:
-    """Gas fields as cell data: interstitial and superficial velocity [m/s], pressure [Pa], voidage."""
-    points, hexes = gas_grid(mesh)
+def write_gas_vtu(path, gas) -> None:
+    """Gas fields of a ``GasPhase`` (its ``mesh``, ``velocity``, ``pressure``, ``voidage``) as cell data:
+    interstitial and superficial velocity [m/s], pressure [Pa], voidage."""
+    points, hexes = gas_grid(gas.mesh)
     cell_data = {
-        "velocity": [solver.velocity],
-        "superficial_velocity": [solver.velocity * solver.voidage[:, None]],
-        "pressure": [solver.pressure],
-        "voidage": [solver.voidage],
+        "velocity": [gas.velocity],
+        "superficial_velocity": [gas.velocity * gas.voidage[:, None]],
+        "pressure": [gas.pressure],
+        "voidage": [gas.voidage],
     }
     tmp = Path(str(path) + ".tmp.vtu")
     meshio.write(tmp, meshio.Mesh(points, [("hexahedron", hexes)], cell_data=cell_data), binary=True)

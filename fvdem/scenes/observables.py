@@ -72,7 +72,7 @@ class Gas(Observable):
         columns = ("gas_max_speed", "gas_inlet_pressure")
         if model.gas.zone.any():
             columns += ("porous_zone_pressure_gradient",)
-        if not model.gas.solver.periodic:
+        if not model.gas.periodic:
             columns += ("bed_pressure_drop",)
         return columns
 

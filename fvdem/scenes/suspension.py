@@ -35,12 +35,12 @@ class Suspension(Observable):
         return self.COLUMNS
 
     def measure(self, model, values):
-        p, s, g, mesh = model.particles, model.gas.solver, model.case.gas, model.gas.mesh
-        settling, phi = settling_velocity(s.voidage, mesh.cell_volumes, s.flux_velocity(), p.velocity)
+        p, gas, g, mesh = model.particles, model.gas, model.case.gas, model.gas.mesh
+        settling, phi = settling_velocity(gas.voidage, mesh.cell_volumes, gas.flux_velocity(), p.velocity)
         sigma_z, sigma_h = velocity_fluctuations(p.velocity)
         momentum = float((p.mass * p.velocity[:, 2]).sum()
-                         + g.density * (s.voidage * mesh.cell_volumes * s.velocity[:, 2]).sum()
-                         + model.gas.returned_momentum[:, 2].sum())
+                         + g.density * (gas.voidage * mesh.cell_volumes * gas.velocity[:, 2]).sum()
+                         + gas.returned_momentum[:, 2].sum())
         return {"slip_reynolds": settling * model.case.particles.equivalent_diameter * g.density / g.viscosity,
                 "settling_velocity": settling, "solids_fraction": phi, "velocity_fluctuation_vertical": sigma_z,
                 "velocity_fluctuation_horizontal": sigma_h, "mixture_momentum_z": momentum}
