@@ -28,6 +28,22 @@ export DASK_DISTRIBUTED__SCHEDULER__WORKER_TTL="${DASK_DISTRIBUTED__SCHEDULER__W
 [ -x .venv/bin/fvdem ] || make venv
 OUT=${FVDEM_RUNS:-$HOME/fvdem-runs}
 
+# --until HH:MM names the clock time's next occurrence when each study starts: a study that starts after it (the
+# next one in the queue, once the first has stopped at it) would take tomorrow's. Resolved once, here, to the
+# moment it names now (an ISO date and time), so every study in the queue stops at the same moment.
+args=()
+while [ $# -gt 0 ]; do
+    if [ "$1" = --until ] && [ $# -ge 2 ]; then
+        moment=$(.venv/bin/python -c 'import sys, datetime; from fvdem.study.cluster import until_epoch
+e = until_epoch(sys.argv[1])
+print(datetime.datetime.fromtimestamp(e).astimezone().isoformat(timespec="seconds") if e else sys.argv[1])' "$2")
+        args+=(--until "$moment"); shift 2
+    else
+        args+=("$1"); shift
+    fi
+done
+set -- ${args[@]+"${args[@]}"}
+
 study() {  # study NAME [ARGS]: one study, restored from its archive where one is committed
     local name=$1; shift
     local restore=()
