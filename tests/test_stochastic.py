@@ -224,6 +224,64 @@ def test_the_gas_receives_the_reaction_of_every_particles_fluctuation():
     np.testing.assert_allclose(by_id[ids], held, rtol=0, atol=1e-12 * np.abs(held).max())
 
 
+def test_group_means_are_removed_and_the_variance_kept():
+    """``remove_group_means``: each group's rows sum to zero afterwards; the rescaling sqrt(n / (n - 1))
+    keeps unit-variance independent rows at unit variance (the estimator's law: E[(x - mean)^2] = (n - 1)/n);
+    a lone row is zeroed."""
+    rng = np.random.default_rng(11)
+    groups = np.repeat(np.arange(4000), 5)
+    groups = np.concatenate([groups, [4000]])  # one group of a single row
+    force = rng.standard_normal((len(groups), 3))
+    stochastic.remove_group_means(force, groups)
+    sums = np.stack([np.bincount(groups, weights=force[:, k]) for k in range(3)], axis=1)
+    np.testing.assert_allclose(sums, 0.0, atol=1e-12)
+    np.testing.assert_array_equal(force[-1], 0.0)
+    variance = force[:-1].var()
+    assert abs(variance - 1.0) < 5 * math.sqrt(2.0 / force[:-1].size)  # 5 standard errors of a variance
+
+
+def test_host_cells_follow_the_grid_wrapping_periodic_axes_and_clipping_walls():
+    from fvdem.gas.mesh import GasMesh
+    periodic = GasMesh.box((3, 3, 6), (0.0, 0.0, 0.0), (0.3, 0.3, 0.6), (True, True, True))
+    points = np.array([[0.05, 0.05, 0.05], [0.15, 0.25, 0.55], [-0.05, 0.31, 0.61]])
+    cells = stochastic.host_cells(points, periodic)
+    # FiPy's order, x fastest; the third point wraps to cell (2, 0, 0)
+    assert cells.tolist() == [0, 1 + 3 * (2 + 3 * 5), 2]
+    np.testing.assert_allclose(periodic.cell_centers[cells[:2]], [[0.05, 0.05, 0.05], [0.15, 0.25, 0.55]])
+    walled = GasMesh.box((2, 2, 4), (0.0, 0.0, 0.0), (0.2, 0.2, 0.4))
+    assert stochastic.host_cells(np.array([[-0.01, 0.21, 0.45]]), walled).tolist() == [0 + 2 * (1 + 2 * 3)]
+
+
+def test_a_cell_zero_mean_leaves_each_cells_particles_and_gas_no_net_fluctuation():
+    """``stochastic_zero_mean = "cell"``: the fluctuations of the particles whose centres share a cell sum to
+    zero (so the cell's particles as a whole feel none), and the gas's reaction, deposited with the
+    interval's trilinear weights, sums to zero over the box and is far smaller than with the box-wide
+    mean: it is only the deposition's spread of zero-sum forces."""
+    from fvdem.coupling.interpolation import ParticleGridMap
+    reactions = {}
+    for zero_mean in ("box", "cell"):
+        table = _suspension()
+        table["coupling"]["stochastic_zero_mean"] = zero_mean
+        case = case_from_dict(table)
+        sim = fvdem.Simulation(case, progress=False)
+        sim.particles.velocity[:] = np.random.default_rng(2).normal(0.0, 5e-3, sim.particles.velocity.shape)
+        weights = ParticleGridMap(sim.gas.mesh, sim.particles, "trilinear", case.coupling.satellites)
+        cells = stochastic.host_cells(sim.particles.position, sim.gas.mesh)
+        sim.model.bridge.advance()
+        fluctuation = sim.model.bridge.last["stochastic_force"]
+        scale = np.abs(fluctuation).max()
+        sums = np.stack([np.bincount(cells, weights=fluctuation[:, k], minlength=sim.gas.mesh.cell_count)
+                         for k in range(3)], axis=1)
+        if zero_mean == "cell":
+            np.testing.assert_allclose(sums, 0.0, atol=1e-12 * scale * len(fluctuation))
+        else:
+            assert np.abs(sums).max() > 0.5 * scale  # a box-wide mean leaves each cell a net force
+        reactions[zero_mean] = weights.scatter(fluctuation)
+        np.testing.assert_allclose(reactions[zero_mean].sum(axis=0), 0.0, atol=1e-12 * scale * len(fluctuation))
+    cell, box = (np.sqrt((reactions[k] ** 2).sum()) for k in ("cell", "box"))
+    assert cell < 0.6 * box
+
+
 def test_a_suspension_with_the_stochastic_force_keeps_the_mixture_momentum_and_moves_sideways():
     """Derksen's force-balanced box with the model: the mixture's momentum stays at zero to round-off
     while the particles move sideways far more than without it."""
@@ -276,6 +334,7 @@ def test_the_generator_state_round_trips_exactly():
     ({"stochastic_force": "force-langevin", "stochastic_seed": -1}, "coupling.stochastic_seed"),
     ({"stochastic_force": "force-langevin", "stochastic_along_scale": -0.5}, "coupling.stochastic_along_scale"),
     ({"stochastic_force": "force-langevin", "drag": "none"}, "coupling.drag = 'none'"),
+    ({"stochastic_force": "force-langevin", "stochastic_zero_mean": "particle"}, "coupling.stochastic_zero_mean"),
 ])
 def test_bad_stochastic_parameters_are_refused(coupling, message):
     table = _suspension()

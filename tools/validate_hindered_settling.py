@@ -37,7 +37,7 @@ FRACTIONS = (0.1, 0.2, 0.29, 0.4, 0.48)
 
 
 def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1, drag=None, stochastic_force=None,
-          stochastic_scale=None, cfd_divisor=1, stochastic_along_scale=None):
+          stochastic_scale=None, cfd_divisor=1, stochastic_along_scale=None, stochastic_zero_mean=None):
     d_over_length = 1.0 if sphere else aspect_ratio + 1.0 / 3.0  # particle length in d
     reach = d_over_length + 0.1
     side = max(9, math.ceil(3.0 * reach + 1e-9))
@@ -62,6 +62,8 @@ def scene(aspect_ratio, sphere, ga, ga_e, phi, duration, seed=1, drag=None, stoc
         table.setdefault("coupling", {})["stochastic_scale"] = stochastic_scale
     if stochastic_along_scale is not None:
         table.setdefault("coupling", {})["stochastic_along_scale"] = stochastic_along_scale
+    if stochastic_zero_mean is not None:
+        table.setdefault("coupling", {})["stochastic_zero_mean"] = stochastic_zero_mean
     if cfd_divisor > 1:  # the scene's CFD step divided, to the nearest whole multiple of its DEM step
         from fvdem.case import case_from_dict
         case = case_from_dict(table)
@@ -136,6 +138,9 @@ def main(argv=None):
                         help="factor on the stochastic force's standard deviations (default 1: as published)")
     parser.add_argument("--stochastic-along-scale", type=float,
                         help="factor on its standard deviation along the slip alone (default 1: as published)")
+    parser.add_argument("--stochastic-zero-mean", choices=("box", "cell"),
+                        help="over which particles the force's mean is removed (default 'box': as published; 'cell': "
+                             "those sharing a grid cell)")
     parser.add_argument("--seed", type=int, default=1, help="insertion and stochastic-force seed of every run")
     parser.add_argument("--cfd-divisor", type=int, default=1,
                         help="divide the scene's CFD step by this (whole DEM steps): the exchange's explicit return "
@@ -163,7 +168,8 @@ def main(argv=None):
     wall0 = time.perf_counter()
     tables = [scene(args.aspect_ratio, args.sphere, args.ga, args.ga_e, phi, args.duration, seed=args.seed,
                     drag=args.drag, stochastic_force=args.stochastic_force, stochastic_scale=args.stochastic_scale,
-                    cfd_divisor=args.cfd_divisor, stochastic_along_scale=args.stochastic_along_scale)
+                    cfd_divisor=args.cfd_divisor, stochastic_along_scale=args.stochastic_along_scale,
+                    stochastic_zero_mean=args.stochastic_zero_mean)
               for phi in args.fractions]
     # one task per fraction on fvdem's sweep engine (the Dask clients of fvdem study)
     from fvdem.study import map_tasks
@@ -189,7 +195,8 @@ def main(argv=None):
         tag += f"_{args.drag}"
     if args.stochastic_force not in (None, "none"):
         tag += f"_{args.stochastic_force}" + (f"x{args.stochastic_scale:g}" if args.stochastic_scale else "") + (
-            f"_along{args.stochastic_along_scale:g}" if args.stochastic_along_scale is not None else "")
+            f"_along{args.stochastic_along_scale:g}" if args.stochastic_along_scale is not None else "") + (
+            f"_{args.stochastic_zero_mean}" if args.stochastic_zero_mean not in (None, "box") else "")
     out = Path(args.out)
     plots = _plots(out, tag, results, fit)
     result = {
@@ -198,6 +205,7 @@ def main(argv=None):
         "galileo": args.ga, "galileo_equivalent": args.ga_e, "drag": tables[0].get("coupling", {}).get("drag", "case"),
         "stochastic_force": args.stochastic_force or "none", "stochastic_scale": args.stochastic_scale or 1.0,
         "stochastic_along_scale": 1.0 if args.stochastic_along_scale is None else args.stochastic_along_scale,
+        "stochastic_zero_mean": args.stochastic_zero_mean or "box",
         "seed": args.seed, "cfd_divisor": args.cfd_divisor,
         "re_by_phi": {f"{phi:g}": r["slip_reynolds"] for phi, r in zip(args.fractions, results)},
         "re_standard_error_by_phi": {f"{phi:g}": r["slip_reynolds_standard_error"] for phi, r in zip(args.fractions, results)},
@@ -255,7 +263,8 @@ def _fluctuation_points(outputs):
         model = r.get("stochastic_force", "none")
         scale, along = r.get("stochastic_scale", 1.0), r.get("stochastic_along_scale", 1.0)
         label = "no stochastic force" if model == "none" else model + ("" if scale == 1.0 else f" x {scale:g}") + (
-            "" if along == 1.0 else f", along-slip x {along:g}")
+            "" if along == 1.0 else f", along-slip x {along:g}") + (
+            ", zero mean per cell" if r.get("stochastic_zero_mean", "box") == "cell" else "")
         points = lines.setdefault((shape, r["drag"]), {}).setdefault(label, {})
         divisor = r.get("cfd_divisor", 1)
         for phi, f in r["fluctuations_by_phi"].items():

@@ -284,6 +284,11 @@ class CouplingConfig:
                                              "alone (on top of stochastic_scale): the share of the along-slip "
                                              "fluctuation the grid does not resolve; 1 is the model as published, "
                                              "any other value a calibration")
+    stochastic_zero_mean: str = spec("box", kind="str", choices=("box", "cell"),
+                                     doc="over which particles the stochastic force's mean is removed each CFD step: "
+                                         "'box' all of them (the model as published), 'cell' those whose centres "
+                                         "share a grid cell (variance kept), so that the sub-grid fluctuation adds "
+                                         "no force to a cell as a whole")
 
 
 @dataclass(frozen=True)

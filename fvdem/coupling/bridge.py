@@ -52,7 +52,7 @@ from ..errors import SimulationError
 from . import closures
 from .interpolation import ParticleGridMap
 from .kernels import column_sums, exchange_terms, particle_forces, slip_at_particles
-from .stochastic import StochasticForce
+from .stochastic import StochasticForce, host_cells
 from .voidage import METHODS as VOIDAGE_METHODS
 from .voidage import voidage as map_voidage
 
@@ -286,7 +286,8 @@ class CouplingBridge:
         c, lift, torque = self.model.evaluate(slip, eps_p, p.axis)
         held = lift  # the forces held over the interval on both sides: lift and the stochastic force
         if self.stochastic is not None:
-            fluctuation = self.stochastic.force(p, slip, eps_p, c, self.cfd_step)
+            groups = host_cells(p.position, self.mesh) if self.config.stochastic_zero_mean == "cell" else None
+            fluctuation = self.stochastic.force(p, slip, eps_p, c, self.cfd_step, groups)
             held = fluctuation if lift is None else lift + fluctuation
             self.last["stochastic_force"] = fluctuation
         at = AtParticles(slip, c, torque, held)

@@ -65,7 +65,13 @@ granular temperature [m^2/s^2].
 **Mean drag kept.** ``F''`` is the particle's departure from the mean drag, so its average over the
 particles is zero by definition; each coupling interval the sample mean is removed from the forces (the
 particles' sum is zero to round-off), so that a sum of ``N`` random forces cannot push the particle phase
-as a whole through the gas and the closure's mean drag stays the mean drag.
+as a whole through the gas and the closure's mean drag stays the mean drag. With ``stochastic_zero_mean =
+"cell"`` the mean is removed over the particles whose centres share a grid cell instead (each force then scaled
+by ``sqrt(n / (n - 1))`` for the cell's ``n`` particles, so its variance stays the model's; a particle alone in
+its cell feels none): the closure already gives each cell its mean drag, and the fluctuation, a sub-grid
+effect, then adds no force to a cell's particles as a whole and none (to the deposition's spread) to its gas,
+so that it cannot drive the resolved flow. Over the whole box it is the published model's reading; per cell an
+assumption of fvdem's (docs/validation-suspension.md, "Velocity fluctuations with a stochastic drag force").
 
 **Time stepping, exact for any step.** The force is held over a coupling interval ``dt`` (one CFD step)
 on both sides, like the lift: the particles' DEM kicks add ``F''`` to their external force, and the gas
@@ -294,12 +300,13 @@ class StochasticForce:
         self.xi = self.generator.standard_normal((count, 3))  # the stationary start
         self._normals = np.empty((count, 6))
 
-    def force(self, particles, slip, voidage, drag, dt) -> np.ndarray:
+    def force(self, particles, slip, voidage, drag, dt, groups=None) -> np.ndarray:
         """The held force [N] (N, 3) of the next coupling interval ``dt`` [s], in the rows' order of
         ``particles`` (the DEM's host view: its ``ids`` key each particle's process, its ``velocity`` gives
         the granular temperature), its mean over the particles removed; advances the process. ``slip`` (N, 3)
         [m/s], ``voidage`` (N,) and ``drag`` (N,) [kg/s] are the drag law's inputs and coefficients of the
-        interval, in the same rows."""
+        interval, in the same rows. ``groups`` (N,) non-negative integers (e.g. each particle's host cell):
+        the mean is removed within each group instead (``remove_group_means``)."""
         ids, velocity = particles.ids, particles.velocity
         n = len(ids)
         out = np.empty((n, 3))
@@ -311,7 +318,10 @@ class StochasticForce:
                               np.ascontiguousarray(drag, float), self.diameter, self.density, self.viscosity,
                               granular_temperature(velocity), float(dt), self.scale, self.along_scale, self.xi,
                               self._normals, out)
-        out -= column_sums(out) / n
+        if groups is None:
+            out -= column_sums(out) / n
+        else:
+            remove_group_means(out, groups)
         self._warn_outside(slip, voidage)
         return out
 
@@ -342,6 +352,36 @@ class StochasticForce:
             raise ValueError(f"stochastic.xi holds {xi.shape[0]} particles; the case has {self.xi.shape[0]}")
         self.xi = xi
         set_generator_words(self.generator, data["stochastic.generator"])
+
+
+def remove_group_means(force, groups) -> None:
+    """Remove, in place, the mean of the rows of ``force`` (N, 3) within each group of ``groups`` (N,)
+    non-negative integers, and scale each row by ``sqrt(n / (n - 1))`` for its group's ``n`` rows, so that a
+    row of independent unit-variance components keeps unit variance; a group of one row is set to zero. The
+    rows of a group then sum to zero to round-off."""
+    groups = np.asarray(groups, np.int64)
+    size = int(groups.max()) + 1 if len(groups) else 0
+    n = np.bincount(groups, minlength=size).astype(float)
+    for k in range(force.shape[1]):
+        means = np.bincount(groups, weights=force[:, k], minlength=size) / np.maximum(n, 1.0)
+        force[:, k] -= means[groups]
+    members = n[groups]
+    force *= np.where(members > 1.0, np.sqrt(members / np.maximum(members - 1.0, 1.0)), 0.0)[:, None]
+
+
+def host_cells(position, mesh) -> np.ndarray:
+    """The index of the cell of ``mesh`` (a ``GasMesh`` box) that holds each point of ``position`` (N, 3)
+    [m], in FiPy's order (x fastest); periodic axes wrapped, others clipped to the grid."""
+    shape = np.asarray(mesh.shape, np.int64)
+    spacing = np.asarray(mesh.spacing, float)
+    lower = np.asarray(mesh.cell_centers[0], float) - 0.5 * spacing
+    index = np.floor((np.asarray(position, float) - lower) / spacing).astype(np.int64)
+    for axis in range(3):
+        if mesh.periodic[axis]:
+            index[:, axis] %= shape[axis]
+        else:
+            np.clip(index[:, axis], 0, shape[axis] - 1, out=index[:, axis])
+    return index[:, 0] + shape[0] * (index[:, 1] + shape[1] * index[:, 2])
 
 
 def granular_temperature(velocity) -> float:
@@ -376,4 +416,4 @@ def set_generator_words(generator, words) -> None:
 __all__ = ["MODELS", "NO_STOCHASTIC_FORCE", "StochasticForce", "StochasticModel", "register_stochastic_force", "stochastic_force_names",
            "describe_stochastic_forces", "force_langevin_amplitude", "collision_frequency", "interval_moments",
            "pseudo_turbulent_energy", "streamwise_anisotropy", "contact_radial_distribution", "stochastic_force_loop",
-           "granular_temperature", "AMPLITUDE", "DECORRELATION"]
+           "granular_temperature", "remove_group_means", "host_cells", "AMPLITUDE", "DECORRELATION"]
