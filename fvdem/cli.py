@@ -101,44 +101,25 @@ def cmd_report(args) -> int:
 
 
 def cmd_compare(args) -> int:
-    from .analysis.plots import plot_colour_layer_panels, plot_mixing, plot_mixing_by_velocity, plot_t95
+    from .analysis.compare import COMPARISONS, compare
+    from .scenes import comparisons_of
     runs = [Path(r) for r in args.runs]
     for run in runs:
         if not (run / "timeseries.csv").exists() or not (run / "case.toml").exists():
             return _fail(f"{run} is not a run folder (needs timeseries.csv and case.toml)")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    print(plot_mixing(runs, out / "mixing_compare.png"))
-    print(plot_mixing_by_velocity(runs, out / "mixing_by_velocity.png"))  # the paper's layout: case and U/Umf
-    print(plot_t95(runs, out / "t95.png", names=compare_groups(runs)))
-    layers = _colour_layer_items(runs)
-    if layers:
-        print(plot_colour_layer_panels(layers, out / "colour_layers_compare.png"))
+    names = comparisons_of(runs)
+    for name in args.only or ():
+        if name not in COMPARISONS:
+            return _fail(f"--only: {name!r} is not a comparison; allowed: {', '.join(COMPARISONS)}")
+    if args.only:
+        names = tuple(args.only)
+    try:
+        paths = compare(runs, args.out, names, {"columns": args.columns})
+    except ValueError as err:  # --columns naming what a run did not record
+        return _fail(f"--columns: {err}")
+    for path in paths:
+        print(path)
     return 0
-
-
-def _colour_layer_items(runs) -> list:
-    """``(label, colour-by-layer record, t95)`` of the compared runs that have one (two colours, and particle
-    snapshots or an archived record: what ``fvdem report`` draws it from), for ``plot_colour_layer_panels``."""
-    from .analysis.plots import read_timeseries, run_labels, series_t95
-    from .scenes.observables import colour_layer_record, has_colour_layers
-    items = []
-    for run, label in zip(runs, run_labels(runs)):
-        record = colour_layer_record(run) if has_colour_layers(run) else None
-        if record is not None:
-            items.append((label, record, series_t95(read_timeseries(run))))
-    return items
-
-
-def compare_groups(runs) -> list[str]:
-    """The line of each run on the t95 chart: its case name (runs of one case at several U/Umf make one
-    line), unless two runs of that name share a U/Umf (two `demo` runs): then each such run is its own,
-    named by its folder."""
-    from .analysis.plots import run_labels
-    cases = [load_case(Path(r) / "case.toml") for r in runs]
-    points = [(c.name, c.gas.u_over_umf, c.gas.inlet_velocity) for c in cases]
-    labels = run_labels(runs)
-    return [labels[k] if points.count(points[k]) > 1 else cases[k].name for k in range(len(runs))]
 
 
 def cmd_study(args) -> int:
@@ -475,10 +456,15 @@ def make_parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", help="write PNG plots for a run folder")
     report.add_argument("out", help="a run folder (the --out of fvdem run); the plots are written into it")
     report.set_defaults(func=cmd_report)
-    compare = sub.add_parser("compare", help="several runs on one chart: mixing entropy against time and "
-                                             "t95 against U/Umf (Mema et al. (2020) Figs. 2-4)")
+    compare = sub.add_parser("compare", help="several runs on one chart: the diagnostics they recorded in common, "
+                             "and the comparisons their scenes declare (a fluidized bed's: mixing entropy against "
+                             "time, t95 against U/Umf, where each bed is still unmixed)")
     compare.add_argument("runs", nargs="+", help="run folders")
-    compare.add_argument("--out", default=".", help="folder for mixing_compare.png, mixing_by_velocity.png and t95.png")
+    compare.add_argument("--out", default=".", help="folder for the charts (timeseries_compare.png, mixing_compare.png, "
+                                                   "mixing_by_velocity.png, t95.png, ...)")
+    compare.add_argument("--columns", nargs="+", metavar="COLUMN",
+                         help="timeseries.csv columns to overlay (default: the first eight the runs recorded in common)")
+    compare.add_argument("--only", nargs="+", metavar="NAME", help="draw only these comparisons (by name)")
     compare.set_defaults(func=cmd_compare)
     study = sub.add_parser("study", help="run a study file's runs on Dask (or --report a study folder)")
     study.add_argument("study", help="a study file (studies/*.toml), or a study folder with --report")

@@ -139,19 +139,19 @@ def test_t95_against_u_over_umf_from_run_folders(tmp_path, monkeypatch):
     # runs with a colour-by-layer record (archived, as a study's archive keeps it) get a panel each
     import json
 
-    from fvdem.cli import _colour_layer_items
+    from fvdem.scenes.observables import colour_layer_items
     record = {"z_lower": 0.0, "layer_height": 0.03, "times": [0.0, 0.5, 1.0],
               "count": [[40, 40], [40, 40], [40, 0]], "fraction": [[0.0, 1.0], [0.3, 0.7], [0.5, None]]}
     for run in (runs[1], runs[2]):
         (run / "colour_layers.json").write_text(json.dumps(record))
-    items = _colour_layer_items(runs)
+    items = colour_layer_items(runs)
     assert [(label, t95 is None) for label, _, t95 in items] == [("ar1_2.9", False), ("ar4_mp_2.0", True)]
     assert items[0][2] == pytest.approx(np.log(20) / 2.0, abs=0.01) and items[0][1] == record
     assert main(["compare", *map(str, runs), "--out", str(tmp_path / "cmp2")]) == 0
     assert (tmp_path / "cmp2" / "colour_layers_compare.png").exists()
     # two runs of one case at one velocity (two `demo` runs) are two lines named by their folders
-    from fvdem.cli import compare_groups
-    assert compare_groups(runs + [twin]) == ["ar1", "ar1_2.9", "ar4_mp", "twin"]
+    from fvdem.scenes.observables import mixing_groups
+    assert mixing_groups(runs + [twin]) == ["ar1", "ar1_2.9", "ar4_mp", "twin"]
 
 
 def test_cells_in_bed_leave_out_the_freeboard_above_a_low_bed_and_keep_its_bubbles():

@@ -10,9 +10,9 @@
 ``scene_for(case)`` picks the first that applies, in this order; ``SCENES`` lists them. The
 ``[suspension]`` table's expansion into a dimensional case is ``suspension.expand_suspension``.
 """
-from .base import SCENES, Observable, Scene, plots_of, register_scene, scene_for
+from .base import SCENES, Observable, Scene, comparisons_of, plots_of, register_scene, scene_for
 from . import suspension, fluidized_bed, fixed_bed, settling  # noqa: F401,E402  (registration order)
 from .suspension import TUNABLE, expand_suspension, suspension_quantities
 
-__all__ = ["SCENES", "Observable", "Scene", "plots_of", "register_scene", "scene_for", "expand_suspension",
+__all__ = ["SCENES", "Observable", "Scene", "comparisons_of", "plots_of", "register_scene", "scene_for", "expand_suspension",
            "suspension_quantities", "TUNABLE"]

@@ -5,7 +5,8 @@ columns it writes, the values it ``measure``s at each sample (read by later obse
 stop test and the writers), a ``history`` it keeps over the run (saved in checkpoints, so a resumed
 run continues it), the ``summary.json`` entries it derives, whether the run ends early (``ends``: the
 bed at rest, the colours mixed) and the names of the report plots that show it
-(``fvdem.analysis.plots.PLOTS``). It only reads the model.
+(``fvdem.analysis.plots.PLOTS``) and the comparisons of several runs it supports
+(``fvdem.analysis.compare.COMPARISONS``). It only reads the model.
 
 A ``Scene`` is the kind of run (fluidized bed, periodic suspension, fixed bed, settling) as a value: a
 name and the observables it measures. ``scene_for(case)`` gives a case's scene: the first registered
@@ -22,6 +23,7 @@ class Observable:
 
     name = ""
     plots: tuple = ()
+    comparisons: tuple = ()  # ``fvdem compare`` charts of several runs (``fvdem.analysis.compare.COMPARISONS``)
     keeps_history = False  # whether ``record`` keeps samples (then a run without output still samples)
 
     def columns(self, model) -> tuple:
@@ -93,6 +95,13 @@ class Scene:
             names += [p for p in observable.plots if p not in names]
         return tuple(names)
 
+    @property
+    def comparisons(self) -> tuple:
+        names = ["timeseries"]
+        for observable in self.observables:
+            names += [c for c in observable.comparisons if c not in names]
+        return tuple(names)
+
 
 @dataclass(frozen=True)
 class SceneType:
@@ -133,3 +142,20 @@ def plots_of(out) -> tuple:
         return scene_for(load_case(Path(out) / "case.toml")).plots
     except (CaseError, OSError):  # no case file, or one this version no longer reads
         return tuple(PLOTS)
+
+
+def comparisons_of(runs) -> tuple:
+    """The comparisons (``fvdem.analysis.compare.COMPARISONS`` names) the run folders' scenes declare, from
+    their case.toml files, in the first run's order; a folder without a readable case adds every one."""
+    from pathlib import Path
+
+    from ..analysis.compare import COMPARISONS
+    from ..case import CaseError, load_case
+    names = []
+    for run in runs:
+        try:
+            declared = scene_for(load_case(Path(run) / "case.toml")).comparisons
+        except (CaseError, OSError):  # no case file, or one this version no longer reads
+            declared = tuple(COMPARISONS)
+        names += [n for n in declared if n not in names]
+    return tuple(names)

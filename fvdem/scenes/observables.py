@@ -8,6 +8,7 @@ import numpy as np
 
 from ..analysis.bed import bed_top, bed_weight_per_area, packed_bed_summary
 from ..analysis.mixing import MIXED, colour_by_layer, mixing_cells, mixing_indices, mixing_time, random_mixture_entropy
+from ..analysis.compare import register_comparison
 from ..analysis.plots import COLOUR_LAYERS, PLOTS, plot_colour_layers, read_timeseries
 from ..io.vtk import read_pvd
 from .base import Observable
@@ -93,6 +94,7 @@ class Mixing(Observable):
 
     name = "mixing"
     plots = ("mixing", "colour_layers")
+    comparisons = ("mixing",)
     keeps_history = True
 
     def __init__(self, case):
@@ -233,3 +235,43 @@ def has_colour_layers(out) -> bool:
 
 # Mixing's chart of where the bed is still unmixed (a record of the snapshots, so drawn here, above fvdem.io)
 PLOTS["colour_layers"] = (lambda out: plot_colour_layers(out, colour_layer_record(out)), has_colour_layers)
+
+
+def colour_layer_items(runs) -> list:
+    """``(label, colour-by-layer record, t95)`` of the runs that have one (two colours, and particle snapshots
+    or an archived record: what ``fvdem report`` draws it from), for ``plot_colour_layer_panels``."""
+    from ..analysis.plots import run_labels, series_t95
+    items = []
+    for run, label in zip(runs, run_labels(runs)):
+        record = colour_layer_record(run) if has_colour_layers(run) else None
+        if record is not None:
+            items.append((label, record, series_t95(read_timeseries(run))))
+    return items
+
+
+def mixing_groups(runs) -> list[str]:
+    """The line of each run on the t95 chart: its case name (runs of one case at several U/Umf make one
+    line), unless two runs of that name share a U/Umf (two `demo` runs): then each such run is its own,
+    named by its folder."""
+    from ..analysis.plots import run_labels
+    from ..case import load_case
+    cases = [load_case(Path(r) / "case.toml") for r in runs]
+    points = [(c.name, c.gas.u_over_umf, c.gas.inlet_velocity) for c in cases]
+    labels = run_labels(runs)
+    return [labels[k] if points.count(points[k]) > 1 else cases[k].name for k in range(len(runs))]
+
+
+@register_comparison("mixing", lambda runs: all((Path(r) / "case.toml").exists() for r in runs) and all(
+    "mixing_entropy" in read_timeseries(r) for r in runs))
+def compare_mixing(runs, out, options) -> list:
+    """Mixing entropy against time (mixing_compare.png; by case and U/Umf, the paper's layout:
+    mixing_by_velocity.png), t95 against U/Umf (t95.png) and where each bed is still unmixed
+    (colour_layers_compare.png, runs with snapshots or an archived record)."""
+    from ..analysis.plots import plot_colour_layer_panels, plot_mixing, plot_mixing_by_velocity, plot_t95
+    out = Path(out)
+    paths = [plot_mixing(runs, out / "mixing_compare.png"), plot_mixing_by_velocity(runs, out / "mixing_by_velocity.png"),
+             plot_t95(runs, out / "t95.png", names=mixing_groups(runs))]
+    layers = colour_layer_items(runs)
+    if layers:
+        paths.append(plot_colour_layer_panels(layers, out / "colour_layers_compare.png"))
+    return paths
