@@ -119,3 +119,25 @@ def test_the_contact_decision_tool_refuses_a_folder_that_is_no_archive(tmp_path)
     result = subprocess.run([sys.executable, str(ROOT / "tools" / "contact_decision.py"), "--archives", str(tmp_path)],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 2 and "not a study archive" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_the_contact_decision_tool_reads_a_familys_velocity_from_its_archived_case(tmp_path):
+    """studies/contact_paper.toml runs its families at their case's own U/Umf, which a study's table (its swept
+    keys only) does not list: the tool takes it from each archived run's case.toml, so the rule finds the runs
+    (an archive whose runs it did not find decided nothing, "no runs")."""
+    import importlib.util
+
+    from fvdem.case import case_from_dict, to_toml
+    spec = importlib.util.spec_from_file_location("contact_decision", ROOT / "tools" / "contact_decision.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    run = tmp_path / "runs" / "ar1_paper_r1"
+    run.mkdir(parents=True)
+    (run / "case.toml").write_text(to_toml(case_from_dict({"name": "ar1", "gas": {"enabled": True, "umf": 1.914,
+                                                                                   "u_over_umf": 2.0}})))
+    ended = {"name": "ar1_paper_r1", "family": "ar1_paper", "status": "ended", "t95": 6.5}
+    assert tool.with_velocity(tmp_path, ended)["gas.u_over_umf"] == 2.0
+    pending = {"name": "ar1_paper_r2", "family": "ar1_paper", "status": "pending", "t95": None}
+    assert "gas.u_over_umf" not in tool.with_velocity(tmp_path, pending)
+    swept = {**ended, "gas.u_over_umf": 1.6}
+    assert tool.with_velocity(tmp_path, swept)["gas.u_over_umf"] == 1.6

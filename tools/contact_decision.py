@@ -26,15 +26,29 @@ ARCHIVES = (ROOT / "docs" / "data" / "mema2020", ROOT / "docs" / "data" / "conta
 
 def table_rows(archive: Path, rebuild: bool = True) -> list:
     """The table rows of an archive (its report rebuilt in a scratch copy, else its committed table), the runs it
-    plans."""
+    plans, each with its ``gas.u_over_umf`` (``with_velocity``)."""
     if not rebuild:
-        return [r for r in json.loads((archive / "table.json").read_text()) if r["status"] != "not planned"]
-    with tempfile.TemporaryDirectory() as scratch:
-        copy = Path(scratch) / archive.name
-        shutil.copytree(archive, copy)
-        report(copy)
-        rows = json.loads((copy / "table.json").read_text())
-    return [r for r in rows if r["status"] != "not planned"]
+        rows = json.loads((archive / "table.json").read_text())
+    else:
+        with tempfile.TemporaryDirectory() as scratch:
+            copy = Path(scratch) / archive.name
+            shutil.copytree(archive, copy)
+            report(copy)
+            rows = json.loads((copy / "table.json").read_text())
+    return [with_velocity(archive, r) for r in rows if r["status"] != "not planned"]
+
+
+def with_velocity(archive: Path, row: dict) -> dict:
+    """``row`` with ``gas.u_over_umf``: a study's table has a column only for the keys it sweeps, so a family at
+    its case's own velocity (``studies/contact_paper.toml``) takes it from the run's archived case.toml; a run
+    not begun (no case.toml) has none."""
+    if "gas.u_over_umf" in row:
+        return row
+    case = archive / "runs" / row["name"] / "case.toml"
+    if not case.exists():
+        return row
+    from fvdem.case import load_case
+    return {**row, "gas.u_over_umf": load_case(case).gas.u_over_umf}
 
 
 def main(argv=None) -> int:
