@@ -1,4 +1,9 @@
-"""Shared helpers: tiny DEM scenes built directly from the library, and a drifting bed for the gas solver."""
+"""Shared helpers: tiny DEM scenes built directly from the library, and a drifting bed for the gas solver.
+
+The tests in the folders below (tests/README.md) import them with ``from conftest import ...``, and the helper
+modules beside this file the same way (``paths``, ``output_keys``, ``study_runs``): pytest's default import
+mode puts tests/, this file's folder, on ``sys.path`` when it loads this file, before any test module. Test
+files are imported by their basename, so no two may share one across the folders."""
 import os
 
 # `make test` runs the suite on two pytest-xdist workers; each test's numba threads (all cores) then share the

@@ -2,7 +2,7 @@
 and ``summary.json``'s keys (nested tables as ``table.key``).
 
 ``python tests/output_keys.py`` records them in ``tests/data/output_keys.json``;
-``tests/test_output_keys.py`` compares a fresh run against that record, so a restructuring that loses
+``tests/regression/test_output_keys.py`` compares a fresh run against that record, so a restructuring that loses
 or renames an output fails. Record again only for an intended change (and say so in CHANGELOG.md).
 """
 from __future__ import annotations
@@ -12,8 +12,9 @@ import sys
 import tomllib
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-RECORD = ROOT / "tests" / "data" / "output_keys.json"
+from paths import DATA, ROOT
+
+RECORD = DATA / "output_keys.json"
 CASES = sorted(p.stem for p in (ROOT / "cases").glob("*.toml"))
 SAMPLES = 24  # timeseries rows: more than the 20 a suspension summary needs
 

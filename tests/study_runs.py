@@ -4,7 +4,8 @@ from pathlib import Path
 
 from fvdem.study import RunSpec
 
-ROOT = Path(__file__).resolve().parents[1]
+from paths import ROOT
+
 SMOKE = ROOT / "studies" / "smoke.toml"
 
 

@@ -1,0 +1,142 @@
+"""The second set of rules of seed 000's findings (issue 66; fvdem.reports.mema2020.readings), fixed before the
+study's stage 3: each decides on rows of known numbers as its rule says, and the first set's verdicts on the
+committed stage-2 archive stay what they were."""
+import json
+
+import numpy as np
+import pytest
+
+from fvdem.reports.mema2020 import readings
+from fvdem.reports.mema2020.rules import check_findings
+from fvdem.reports.mema2020.table import entropy_columns
+
+from paths import ROOT
+
+
+def _rows(family, v, window=None, t95=None, dense=None, ends=None, n=None):
+    """Table rows of ``family`` at U/Umf ``v``: one per value of the lists given (window entropy, t95, dense-bed
+    expansion, end time)."""
+    n = n or len(next(x for x in (window, t95, dense) if x is not None))
+    rows = []
+    for k in range(n):
+        rows.append({"name": f"{family}_{v}_r{k + 1}", "family": family, "gas.u_over_umf": v, "status": "finished",
+                     "mixing_entropy_window": None if window is None else window[k],
+                     "t95": None if t95 is None else t95[k],
+                     "simulated_seconds": (ends or [20.0] * n)[k],
+                     "dense_bed_expansion": None if dense is None else dense[k]})
+    return rows
+
+
+def test_the_entropy_columns_read_the_curve_at_fixed_times_and_hold_a_mixed_bed_at_its_end():
+    time = np.arange(0.0, 6.01, 0.01)
+    series = {"time": time, "mixing_entropy": np.minimum(time / 5.0, 0.96)}
+    mixed = entropy_columns(series, ended_mixed=True)
+    assert mixed["mixing_entropy_at_2"] == pytest.approx(0.4) and mixed["mixing_entropy_at_8"] == pytest.approx(0.96)
+    # the window 1-8 s every 0.5 s: t/5 up to 4.8 s, then 0.96 (held past 6 s)
+    expected = np.mean([min(t / 5.0, 0.96) for t in np.arange(1.0, 8.01, 0.5)])
+    assert mixed["mixing_entropy_window"] == pytest.approx(expected)
+    going = entropy_columns(series, ended_mixed=False)  # a run that has not reached 8 s: no window yet
+    assert going["mixing_entropy_at_8"] is None and going["mixing_entropy_window"] is None
+    assert going["mixing_entropy_at_4"] == pytest.approx(0.8)
+
+
+def test_the_entropy_curve_rule_holds_where_the_replicas_tell_the_order_and_decides_against_the_reverse():
+    higher = _rows("ar4_mp", 1.6, window=[0.60, 0.62, 0.61]) + _rows("ar4_mp", 1.7, window=[0.72, 0.70, 0.71])
+    lower = _rows("ar1", 1.6, window=[0.45, 0.44, 0.46]) + _rows("ar1", 1.7, window=[0.55, 0.56, 0.57])
+    claim = "AR-4 above AR-1"
+    assert readings.entropy_higher(higher + lower, "ar4_mp", "ar1", (1.6, 1.7), claim, "")["verdict"] == "holds"
+    swapped = [{**r, "family": "ar1" if r["family"] == "ar4_mp" else "ar4_mp"} for r in higher + lower]
+    assert readings.entropy_higher(swapped, "ar4_mp", "ar1", (1.6, 1.7), claim, "")["verdict"] == "does not hold"
+    noisy = _rows("ar4_mp", 1.6, window=[0.3, 0.8]) + _rows("ar1", 1.6, window=[0.5, 0.52])
+    finding = readings.entropy_higher(noisy, "ar4_mp", "ar1", (1.6,), claim, "")
+    assert finding["verdict"] == "open" and "within their spread" in finding["why"]
+    assert "the paper: " in finding["rule"] and finding["readings"] == "second" and finding["fixed"] == "2026-12-07"
+
+
+def test_little_change_is_one_equivalence_test_at_20_percent():
+    tight = (_rows("ar1", 2.3, t95=[3.3, 3.4, 3.35]) + _rows("ar1", 2.6, t95=[3.2, 3.25, 3.3])
+             + _rows("ar1", 2.9, t95=[3.1, 3.15, 3.2]))
+    assert readings.little_change(tight, "ar1", "")["verdict"] == "holds"
+    apart = (_rows("ar1", 2.3, t95=[5.0, 5.1, 5.05]) + _rows("ar1", 2.6, t95=[3.2, 3.25, 3.3])
+             + _rows("ar1", 2.9, t95=[3.1, 3.15, 3.2]))
+    assert readings.little_change(apart, "ar1", "")["verdict"] == "does not hold"
+    unmixed = apart + _rows("ar1", 2.9, t95=[None])
+    assert readings.little_change(unmixed, "ar1", "")["verdict"] == "open"
+
+
+def test_the_larger_fall_counts_an_unmixed_run_at_its_end_as_a_bound():
+    ar1 = _rows("ar1", 1.6, t95=[17.0, 16.5, 16.8]) + _rows("ar1", 2.0, t95=[5.0, 5.2, 4.9])
+    ar4 = _rows("ar4_mp", 1.6, t95=[8.0, 8.3, 8.1]) + _rows("ar4_mp", 2.0, t95=[4.7, 4.8, 4.9])
+    assert readings.larger_drop(ar1 + ar4, "")["verdict"] == "holds"  # 11.7 s against 3.3 s
+    stalled = _rows("ar4_mp", 1.6, t95=[None, None, None]) + _rows("ar4_mp", 2.0, t95=[4.7, 4.8, 4.9])
+    finding = readings.larger_drop(ar1 + stalled, "")  # AR-4's fall > 20 - 4.8 = 15.2 s, a bound above AR-1's
+    assert finding["verdict"] == "does not hold" and finding["values"]["ar4_mp"]["lower bound"]
+    unknown = _rows("ar4_mp", 1.6, t95=[None], ends=[None]) + _rows("ar4_mp", 2.0, t95=[4.7, 4.8, 4.9])
+    assert readings.larger_drop(ar1 + unknown, "")["verdict"] == "open"  # unmixed at an unknown end: no bound
+    short = _rows("ar4_mp", 1.6, t95=[None] * 3, ends=[8.0] * 3) + _rows("ar4_mp", 2.0, t95=[4.7, 4.8, 4.9])
+    assert readings.larger_drop(ar1 + short, "")["verdict"] == "open"  # > 3.2 s only: a bound that decides nothing
+
+
+def test_the_first_step_rule_compares_each_later_rise_with_the_first():
+    def family(name, windows):
+        return [r for v, w in windows.items() for r in _rows(name, v, window=w)]
+    steep_first = {1.6: [0.40, 0.41, 0.42], 1.7: [0.70, 0.71, 0.72], 2.0: [0.80, 0.81, 0.82], 2.3: [0.85, 0.86, 0.87]}
+    rows = family("ar1", steep_first) + family("ar4_mp", steep_first) + family("ar4_sp", steep_first)
+    assert readings.largest_change_first(rows, ("ar1", "ar4_mp", "ar4_sp"), "")["verdict"] == "holds"
+    later = {**steep_first, 2.0: [0.95, 0.96, 0.97], 1.7: [0.50, 0.51, 0.52]}
+    rows = family("ar1", later) + family("ar4_mp", steep_first) + family("ar4_sp", steep_first)
+    assert readings.largest_change_first(rows, ("ar1", "ar4_mp", "ar4_sp"), "")["verdict"] == "does not hold"
+
+
+def test_the_first_rules_verdicts_on_the_committed_archive_are_unchanged_and_the_second_follow_them():
+    archive = ROOT / "docs" / "data" / "mema2020"
+    rows = [r for r in json.loads((archive / "table.json").read_text()) if r["status"] != "not planned"]
+    committed = json.loads((archive / "findings.json").read_text())
+    first = [f for f in committed if f.get("readings") != "second"]
+    findings = check_findings(rows)
+    assert findings[:len(first)] == first  # the first set, word for word
+    second = findings[len(first):]
+    assert len(second) == 8 and all(f["readings"] == "second" and "the paper: " in f["rule"] for f in second)
+
+
+def test_the_contact_settings_rule_tells_differ_agree_or_open():
+    def shape(defaults, paper, t_def, t_pap, w_def, w_pap):
+        return (_rows(defaults, 2.0, t95=t_def, window=w_def) + _rows(paper, 2.0, t95=t_pap, window=w_pap))
+    same = [5.0, 5.1, 4.9, 5.05, 4.95, 5.0, 5.1, 4.9]
+    rows = (shape("ar1_t95", "ar1_paper", same, [5.0, 5.02, 4.98], [0.76] * 4 + [0.75] * 4, [0.76, 0.755, 0.757])
+            + shape("ar4_mp_t95", "ar4_mp_paper", same, [3.0, 3.1, 2.9], [0.76] * 4 + [0.75] * 4, [0.85, 0.86, 0.84]))
+    result = readings.contact_settings(rows)
+    assert result["shapes"]["AR-1"]["verdict"] == "agree" and result["shapes"]["AR-4 MP"]["verdict"] == "differ"
+    assert result["shapes"]["AR-4 MP"]["t95"]["order"] == "lower" and result["shapes"]["AR-1"]["t95"]["runs"] == [3, 8]
+    unmixed = rows + _rows("ar1_paper", 2.0, t95=[None], window=[0.7], ends=[8.0])
+    assert readings.contact_settings(unmixed)["shapes"]["AR-1"]["verdict"] == "open"
+
+
+def test_the_contact_decision_tool_refuses_a_folder_that_is_no_archive(tmp_path):
+    import subprocess
+    import sys
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / "contact_decision.py"), "--archives", str(tmp_path)],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "not a study archive" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_the_contact_decision_tool_reads_a_familys_velocity_from_its_archived_case(tmp_path):
+    """studies/contact_paper.toml runs its families at their case's own U/Umf, which a study's table (its swept
+    keys only) does not list: the tool takes it from each archived run's case.toml, so the rule finds the runs
+    (an archive whose runs it did not find decided nothing, "no runs")."""
+    import importlib.util
+
+    from fvdem.case import case_from_dict, to_toml
+    spec = importlib.util.spec_from_file_location("contact_decision", ROOT / "tools" / "contact_decision.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    run = tmp_path / "runs" / "ar1_paper_r1"
+    run.mkdir(parents=True)
+    (run / "case.toml").write_text(to_toml(case_from_dict({"name": "ar1", "gas": {"enabled": True, "umf": 1.914,
+                                                                                   "u_over_umf": 2.0}})))
+    ended = {"name": "ar1_paper_r1", "family": "ar1_paper", "status": "ended", "t95": 6.5}
+    assert tool.with_velocity(tmp_path, ended)["gas.u_over_umf"] == 2.0
+    pending = {"name": "ar1_paper_r2", "family": "ar1_paper", "status": "pending", "t95": None}
+    assert "gas.u_over_umf" not in tool.with_velocity(tmp_path, pending)
+    swept = {**ended, "gas.u_over_umf": 1.6}
+    assert tool.with_velocity(tmp_path, swept)["gas.u_over_umf"] == 1.6
