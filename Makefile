@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-# the test suite's pytest-xdist workers (whole test files each: tests/test_slurm.py's SLURM serves its file);
+# the test suite's pytest-xdist workers (whole test files each: tests/study/test_slurm.py's SLURM serves its file);
 # `make test TEST_WORKERS=0` runs it in one process
 TEST_WORKERS ?= 2
 

@@ -6,7 +6,7 @@ The case schema is generated from the same dataclass fields (``fvdem.case``: kin
 choices, registry, doc) that ``load_case`` checks and ``fvdem schema`` documents, so the three cannot
 drift. A schema cannot express the cross-checks (e.g. the DEM step against the collision time, the CFD
 step a multiple of the DEM step); ``fvdem check`` still runs them. ``fvdem schema --json-schema case``
-prints it; ``docs/schema/`` holds the committed copies (``tests/test_json_schema.py`` keeps them current).
+prints it; ``docs/schema/`` holds the committed copies (``tests/unit/test_json_schema.py`` keeps them current).
 """
 from __future__ import annotations
 

@@ -44,7 +44,7 @@ def _settling(particles: dict) -> dict:
 
 # name: (the case table, its steps: CFD steps where the gas runs, else DEM steps). Together they run what
 # cases/ar4_mp.toml, ar4_mp_drag.toml, ar1.toml, demo.toml, bed_ar4.toml, bed_ar1.toml, fixed_bed_gas.toml and
-# hindered_settling.toml run (tests/test_warmup.py: those cases need no kernel signature beyond the scenes')
+# hindered_settling.toml run (tests/unit/test_warmup.py: those cases need no kernel signature beyond the scenes')
 SCENES = {
     "rods_settling": (_settling(_RODS), 5),
     "gas": ({"domain": {"upper": [0.06, 0.06, 0.3]}, "particles": {"count": 0},

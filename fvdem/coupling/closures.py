@@ -11,7 +11,7 @@ formula, validity and reference (the flagged choices on the ambiguous points are
 - ``Law.evaluate``: a law at N particles through the compiled loop of its kind, which ``law_loops`` writes
   from the registry with every registered law inlined (``fast_loops``), warning once when used outside its
   fitted range; ``Law.reference_values``: the same law's ``py_func`` particle by particle in plain Python,
-  what tests/test_kernels.py holds the compiled path to (1e-12). ``evaluate_set``: a drag, lift and torque
+  what tests/unit/test_kernels.py holds the compiled path to (1e-12). ``evaluate_set``: a drag, lift and torque
   law together (in one pass where a set is registered for them).
 - numpy forms (``single_particle_drag_coefficient``, ``multi_particle_lift``, ``sphericities``, ...):
   the scalar functions of ``laws.py`` applied elementwise, for tools, tests and the analysis.

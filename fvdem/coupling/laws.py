@@ -17,7 +17,7 @@ Sommerfeld, Sanjeevi & Padding's F(Re, eps_s), Zastawny's form, the lift and tor
 scalar functions here too, each with its formula and reference.
 
 Choices on the points docs/equations.md flags as ambiguous (each pinned by a test in
-tests/test_closures.py):
+tests/verification/test_closures.py):
 
 - Particle Reynolds number: the *superficial* slip, ``Re = rho d_p eps |u| / mu`` (Di Felice 1994,
   CFDEMcoupling; Sanjeevi & Padding normalise by the superficial velocity too), floored at

@@ -87,7 +87,7 @@ int xi dt``, drawn jointly with the end value from their exact Gaussian law give
 
 (``interval_moments``), so the impulse a particle receives over an interval is the continuous process's
 whatever ``dt / T_F``, and the state keeps variance 1 and autocorrelation ``exp(-t / T_F)``
-(tests/test_stochastic.py). The normals come from numpy's PCG64 generator seeded with
+(tests/verification/test_stochastic.py). The normals come from numpy's PCG64 generator seeded with
 ``coupling.stochastic_seed``, drawn per particle id (not per row: the DEM re-sorts its rows), and the
 generator's state and ``xi`` are saved in checkpoints (``state`` / ``restore``), so a resumed run is
 bit-for-bit the uninterrupted one.

@@ -52,7 +52,7 @@ HISTORY_COLUMNS = 4  # tangential displacement (3) and the "contact exists" flag
 
 # The contact law's default parameters, written once: the case's [contact] keys (fvdem.case.schema.ContactConfig,
 # which adds their units, ranges and docs) and ``system.ContactModel`` take their defaults from here
-# (tests/test_contact_law.py holds the three equal). The stiffness is the speed-accuracy front's
+# (tests/verification/test_contact_law.py holds the three equal). The stiffness is the speed-accuracy front's
 # (docs/speed-accuracy.md); Mema et al. (2020) Table 5 has 2e4 N/m with a DEM step of 1e-5 s.
 DEFAULTS = MappingProxyType({
     "normal_stiffness": 800.0,  # k_n [N/m]

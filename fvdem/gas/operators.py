@@ -3,7 +3,7 @@
 Each operator knows, once, where every face or cell contributes in a fixed CSR pattern (a sparse
 "scatter" matrix from per-face or per-cell coefficients to the CSR data array). Assembling the
 matrix for new coefficients is then one sparse mat-vec and no allocation of structure. The
-discretization is FiPy's, and ``tests/test_gas_operators.py`` checks the matrices and right-hand
+discretization is FiPy's, and ``tests/unit/test_gas_operators.py`` checks the matrices and right-hand
 sides against FiPy's own terms to round-off.
 
 Sign conventions follow FiPy's terms:

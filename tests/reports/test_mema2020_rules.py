@@ -65,7 +65,7 @@ def test_the_papers_findings_are_checked_from_the_t95_table():
     rows = [row("ar1", 1.6, 6.0), row("ar4_mp", 1.6, 4.0), row("ar1", 2.0, 3.0), row("ar4_mp", 2.0, 2.5),
             row("ar4_mp_drag", 2.0, 3.5), row("ar1", 2.9, 2.7), row("ar1", 2.6, 2.5), row("ar4_mp", 2.9, None)]
     verdicts = {f["finding"].split(" (")[0].split(",")[0]: f["verdict"] for f in check_findings(rows)
-                if f.get("readings") != "second"}  # the first set (the second: tests/test_mema2020_readings.py)
+                if f.get("readings") != "second"}  # the first set (the second: tests/reports/test_mema2020_readings.py)
     assert verdicts["AR-4"] == "holds"  # 4.0 < 6.0 and 2.5 < 3.0
     assert verdicts["lift and torque shorten AR-4 mixing"] == "holds"  # 2.5 < 3.5 at 2.0 Umf
     assert verdicts["single- against multi-particle closures: only a slight effect on AR-4 mixing"] == "open"

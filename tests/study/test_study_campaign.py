@@ -175,7 +175,7 @@ def test_with_a_deadline_the_runs_expected_to_end_by_it_start_first(tmp_path, mo
 
     import fvdem.provenance
     # read on a processor none of the archive's runs ran on: the rates as measured (on one of theirs the status
-    # scales them to it: tests/test_locks.py)
+    # scales them to it: tests/unit/test_locks.py)
     monkeypatch.setattr(fvdem.provenance, "cpu_model", lambda: "a processor of its own")
 
     from fvdem.study.runner import _Queue, _bed_wall, _expected_wall, _fitting

@@ -1,8 +1,8 @@
 """The study engine (fvdem.study) on small and synthetic studies: a study file expands into checked runs, each
 run a task that is skipped at its end, resumed from its checkpoint or reported failed with its cause; the index
 (study.json), the queue's order, stop files and deadlines, the generic table, costs, archives and restores, folders
-of another definition. The paper's report has its own files (test_mema2020_report.py, test_mema2020_rules.py);
-the Dask clusters and batch jobs theirs (test_study_cluster.py)."""
+of another definition. The paper's report has its own files (tests/reports/test_mema2020_report.py,
+test_mema2020_rules.py); the Dask clusters and batch jobs theirs (test_study_cluster.py)."""
 import json
 import os
 import subprocess
