@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from .plots import LABELS, LOG_SCALE, NOT_PLOTTED, _pyplot, _save, log_panel, read_timeseries, run_labels
+from .plots import NOT_PLOTTED, read_timeseries, run_labels, timeseries_panels
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,6 @@ def common_columns(runs) -> list[str]:
 def plot_timeseries_compare(runs, path, columns=None) -> Path:
     """``columns`` of the runs' time series (default: the first eight they recorded in common), a panel each,
     a line a run, labelled by folder (``run_labels``)."""
-    plt = _pyplot()
     series = [read_timeseries(r) for r in runs]
     if columns:
         missing = [(c, str(r)) for c in columns for r, s in zip(runs, series) if c not in s]
@@ -59,23 +58,7 @@ def plot_timeseries_compare(runs, path, columns=None) -> Path:
         keys = common_columns(runs)[:8]
     if not keys:
         raise ValueError("the runs recorded no column in common besides time")
-    rows = (len(keys) + 1) // 2
-    fig, axes = plt.subplots(rows, 2, figsize=(9.5, 2.7 * rows), sharex=True, squeeze=False)
-    for ax, key in zip(axes.flat, keys):
-        for ts, label in zip(series, run_labels(runs)):
-            if key in LOG_SCALE:
-                log_panel(ax, ts["time"], ts[key])
-                ax.get_lines()[-1].set_label(label)
-            else:
-                ax.plot(ts["time"], ts[key], label=label)
-        ax.set_ylabel(LABELS.get(key, key))
-        ax.grid(alpha=0.3)
-    for ax in list(axes.flat)[len(keys):]:
-        ax.set_visible(False)
-    for ax in axes[-1]:
-        ax.set_xlabel("time [s]")
-    axes.flat[0].legend(fontsize=7)
-    return _save(fig, Path(path))
+    return timeseries_panels(series, run_labels(runs), keys, Path(path))
 
 
 @register_comparison("timeseries", lambda runs: all((Path(r) / "timeseries.csv").exists() for r in runs))

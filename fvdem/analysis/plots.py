@@ -84,23 +84,33 @@ def run_labels(runs) -> list[str]:
 
 def plot_timeseries(out) -> Path:
     """Every recorded diagnostic against time (whatever the run's phases wrote)."""
-    plt = _pyplot()
     ts = read_timeseries(out)
     keys = [k for k in ts if k != "time" and k not in NOT_PLOTTED][:8]
+    return timeseries_panels([ts], [None], keys, Path(out) / "timeseries.png")
+
+
+def timeseries_panels(series, labels, keys, path) -> Path:
+    """``keys`` of the time series ``series`` (``read_timeseries``'s) against time, a panel each, two columns, a
+    line a series (labelled ``labels``, a legend where they are not None)."""
+    plt = _pyplot()
     rows = (len(keys) + 1) // 2
-    fig, axes = plt.subplots(rows, 2, figsize=(9, 2.6 * rows), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(rows, 2, figsize=(9.5, 2.7 * rows), sharex=True, squeeze=False)
     for ax, key in zip(axes.flat, keys):
-        if key in LOG_SCALE:
-            log_panel(ax, ts["time"], ts[key])
-        else:
-            ax.plot(ts["time"], ts[key])
+        for ts, label in zip(series, labels):
+            if key in LOG_SCALE:
+                log_panel(ax, ts["time"], ts[key])
+                ax.get_lines()[-1].set_label(label)
+            else:
+                ax.plot(ts["time"], ts[key], label=label)
         ax.set_ylabel(LABELS.get(key, key))
         ax.grid(alpha=0.3)
     for ax in list(axes.flat)[len(keys):]:
         ax.set_visible(False)
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
-    return _save(fig, Path(out) / "timeseries.png")
+    if any(label is not None for label in labels):
+        axes.flat[0].legend(fontsize=7)
+    return _save(fig, path)
 
 
 def plot_gas_profile(out) -> Path:

@@ -33,7 +33,7 @@ def test_a_suspensions_runs_get_their_common_diagnostics_one_line_a_run(tmp_path
     assert comparisons.common_columns([a, b]) == ["slip_reynolds"]
     import fvdem.analysis.plots as plots
     figures, real_save = [], plots._save
-    monkeypatch.setattr(comparisons, "_save", lambda fig, path: figures.append(fig) or real_save(fig, path))
+    monkeypatch.setattr(plots, "_save", lambda fig, path: figures.append(fig) or real_save(fig, path))
     assert main(["compare", str(a), str(b), "--out", str(tmp_path / "cmp")]) == 0
     assert sorted(p.name for p in (tmp_path / "cmp").iterdir()) == ["timeseries_compare.png"]
     lines = figures[0].axes[0].get_lines()
