@@ -311,7 +311,9 @@ def _fluctuation_plot(path, outputs):
     lines = _fluctuation_points(outputs)
     Path(path).with_suffix(".md").write_text(_fluctuation_table(lines) + "\n")
     shapes = sorted(lines)
-    fig, axes = plt.subplots(2, len(shapes), figsize=(5.0 * len(shapes), 7.0), squeeze=False, sharex=True)
+    labels = list(dict.fromkeys(label for shape in shapes for label in lines[shape]))
+    colours = {label: f"C{k % 10}" if k < 10 else plt.get_cmap("tab20")(k % 20) for k, label in enumerate(labels)}
+    fig, axes = plt.subplots(2, len(shapes), figsize=(5.5 * len(shapes), 8.0), squeeze=False, sharex=True)
     for column, (shape, drag) in enumerate(shapes):
         top, bottom = axes[0, column], axes[1, column]
         for label, points in lines[(shape, drag)].items():
@@ -323,7 +325,7 @@ def _fluctuation_plot(path, outputs):
             def bars(values, centre):
                 return np.array([centre - [v.min() for v in values], [v.max() for v in values] - centre])
             line = top.errorbar(phi, vertical, yerr=bars([r[:, 0] for r in runs], vertical), fmt="o-", capsize=3,
-                                label=f"{label}: vertical")[0]
+                                color=colours[label], label=f"{label}: vertical")[0]
             top.errorbar(phi, horizontal, yerr=bars([r[:, 1] for r in runs], horizontal), fmt="s--", capsize=3,
                          color=line.get_color(), label=f"{label}: horizontal")
             middle = np.array([v.mean() for v in ratio])
