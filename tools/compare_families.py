@@ -20,6 +20,7 @@ from pathlib import Path
 
 from scipy import stats
 
+from contact_decision import with_velocity  # tools/, beside this script
 from fvdem.study.records import RunState, state_of
 
 
@@ -43,18 +44,8 @@ def side_rows(spec: str, velocity=None) -> tuple:
     rows = [r for r in json.loads((archive / "table.json").read_text())
             if r["family"] in names and state_of(r["status"]) == RunState.ENDED]
     if velocity is not None:
-        rows = [r for r in rows if _velocity(archive, r) == velocity]
+        rows = [r for r in rows if with_velocity(archive, r).get("gas.u_over_umf") == velocity]
     return f"{archive.name}:{families}", rows
-
-
-def _velocity(archive: Path, row: dict):
-    if "gas.u_over_umf" in row:
-        return row["gas.u_over_umf"]
-    case = archive / "runs" / row["name"] / "case.toml"
-    if not case.exists():
-        return None
-    from fvdem.case import load_case
-    return load_case(case).gas.u_over_umf
 
 
 def difference(a: list, b: list) -> dict:

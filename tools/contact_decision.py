@@ -18,6 +18,7 @@ import tempfile
 from pathlib import Path
 
 from fvdem.study import report
+from fvdem.study.records import folder_case
 from fvdem.reports.mema2020.readings import contact_settings
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,13 +43,8 @@ def with_velocity(archive: Path, row: dict) -> dict:
     """``row`` with ``gas.u_over_umf``: a study's table has a column only for the keys it sweeps, so a family at
     its case's own velocity (``studies/contact_paper.toml``) takes it from the run's archived case.toml; a run
     not begun (no case.toml) has none."""
-    if "gas.u_over_umf" in row:
-        return row
-    case = archive / "runs" / row["name"] / "case.toml"
-    if not case.exists():
-        return row
-    from fvdem.case import load_case
-    return {**row, "gas.u_over_umf": load_case(case).gas.u_over_umf}
+    case = None if "gas.u_over_umf" in row else folder_case(archive / "runs" / row["name"])
+    return row if case is None else {**row, "gas.u_over_umf": case.gas.u_over_umf}
 
 
 def main(argv=None) -> int:
