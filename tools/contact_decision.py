@@ -1,14 +1,17 @@
 """The contact settings, decided (issue 66, item 3): fvdem's defaults against Mema et al.'s own contact stiffness
 and steps, per shape at 2.0 Umf, from the committed archives of the paper's study (the defaults' replicas) and of
 ``studies/contact_paper.toml`` (the paper's settings), by the rule ``fvdem.reports.mema2020.readings.contact_settings``
-(fixed before the runs it judges).
+(fixed before the runs it judges); and where they differ, the cheaper candidates of
+``studies/contact_candidates.toml`` against both, and the settings the defaults move to, by
+``readings.contact_candidates`` (fixed before its runs).
 
-    python tools/contact_decision.py --archives docs/data/mema2020 docs/data/contact_paper --json
+    python tools/contact_decision.py --archives docs/data/mema2020 docs/data/contact_paper \
+        docs/data/contact_candidates --json
 
 Each archive's report is rebuilt in a scratch copy first (its table with the entropy columns); ``--quick`` reads
 the archives' committed tables as they are. Without ``--archives``, the committed archives of both studies that
 exist. The last line is one JSON object: per shape, each measure's means at both settings, their runs and order,
-and the verdict."""
+and the verdict; under ``candidates``, per shape each candidate's verdict and the ``choice``."""
 from __future__ import annotations
 
 import argparse
@@ -19,10 +22,10 @@ from pathlib import Path
 
 from fvdem.study import report
 from fvdem.study.records import folder_case
-from fvdem.reports.mema2020.readings import contact_settings
+from fvdem.reports.mema2020.readings import contact_candidates, contact_settings
 
 ROOT = Path(__file__).resolve().parents[1]
-ARCHIVES = (ROOT / "docs" / "data" / "mema2020", ROOT / "docs" / "data" / "contact_paper")
+ARCHIVES = tuple(ROOT / "docs" / "data" / name for name in ("mema2020", "contact_paper", "contact_candidates"))
 
 
 def table_rows(archive: Path, rebuild: bool = True) -> list:
@@ -50,8 +53,8 @@ def with_velocity(archive: Path, row: dict) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--archives", nargs="+", type=Path,
-                        help="study archives (fvdem study DIR --archive) holding both settings' runs (default: the "
-                             "committed docs/data/mema2020 and docs/data/contact_paper, those that exist)")
+                        help="study archives (fvdem study DIR --archive) holding the settings' runs (default: the "
+                             "committed docs/data/mema2020, contact_paper and contact_candidates, those that exist)")
     parser.add_argument("--quick", action="store_true", help="read the archives' committed tables, no rebuild")
     parser.add_argument("--velocity", type=float, default=2.0, help="U/Umf of the comparison (default 2.0)")
     parser.add_argument("--json", action="store_true", help="print only the JSON object")
@@ -62,10 +65,16 @@ def main(argv=None) -> int:
         parser.exit(2, f"--archives: {', '.join(missing)}: not a study archive (no study.json)\n")
     rows = [r for archive in archives for r in table_rows(archive, rebuild=not args.quick)]
     result = contact_settings(rows, args.velocity)
+    result["candidates"] = contact_candidates(rows, args.velocity)
     if not args.json:
         for shape, entry in result["shapes"].items():
             print(f"{shape}: {entry['verdict']}; t95 {entry['t95']['paper']} (paper's settings) against "
                   f"{entry['t95']['defaults']} (defaults), {entry['t95']['order']}")
+            chosen = result["candidates"]["shapes"][shape]
+            for family, c in chosen["candidates"].items():
+                print(f"  {family}: {c['verdict']}; t95 {c['t95']['candidate']} ({c['t95']['runs']} runs), "
+                      f"{c['cost']} CPU s per simulated s")
+            print(f"  the defaults move to: {chosen['choice'] or 'not decided yet'}")
     print(json.dumps(result))
     return 0
 

@@ -112,6 +112,38 @@ def test_the_contact_settings_rule_tells_differ_agree_or_open():
     assert readings.contact_settings(unmixed)["shapes"]["AR-1"]["verdict"] == "open"
 
 
+def test_the_contact_candidates_rule_chooses_the_cheapest_that_reproduces_the_papers_change():
+    """studies/contact_candidates.toml's rule on known numbers: the defaults (t95 5) differ from the paper's settings
+    (7); a candidate told apart from the paper's differs; one between both, told from neither, is open; one like the
+    paper's agrees, and of two agreeing the cheaper (CPU s per simulated s) is the choice."""
+    def costed(family, t95, window, cpu):
+        return [{**r, "cpu_seconds": cpu * r["simulated_seconds"]}
+                for r in _rows(family, 2.0, t95=t95, window=window, ends=[8.0] * len(t95))]
+    defaults = costed("ar1_t95", [5.0, 5.1, 4.9, 5.05, 4.95, 5.0, 5.1, 4.9], [0.80] * 8, 190.0)
+    paper = costed("ar1_paper", [7.0, 7.1, 6.9], [0.70, 0.71, 0.69], 720.0)
+    like = costed("ar1_candidate_k3200", [6.95, 7.05, 7.0], [0.70, 0.705, 0.695], 340.0)
+    cheaper_like = costed("ar1_candidate_cfd", [7.0, 6.9, 7.1], [0.71, 0.70, 0.70], 300.0)
+    unlike = costed("ar1_candidate_soft", [5.0, 5.05, 4.95], [0.80, 0.80, 0.80], 200.0)
+    between = costed("ar1_candidate_mid", [5.0, 7.0, 9.0], [0.6, 0.75, 0.9], 250.0)
+    result = readings.contact_candidates(defaults + paper + like + unlike + between)["shapes"]["AR-1"]
+    assert result["contact_settings"] == "differ"
+    verdicts = {f: c["verdict"] for f, c in result["candidates"].items()}
+    assert verdicts == {"ar1_candidate_k3200": "agrees", "ar1_candidate_soft": "differs",
+                        "ar1_candidate_mid": "open"}
+    assert result["choice"] == "ar1_candidate_k3200" and result["candidates"]["ar1_candidate_k3200"]["cost"] == 340.0
+    both = readings.contact_candidates(defaults + paper + like + cheaper_like)["shapes"]["AR-1"]
+    assert both["choice"] == "ar1_candidate_cfd"  # the cheaper of two agreeing
+    assert readings.contact_candidates(defaults + paper + unlike)["shapes"]["AR-1"]["choice"] == "ar1_paper"
+    assert readings.contact_candidates(defaults + paper + between)["shapes"]["AR-1"]["choice"] is None
+    # the defaults agreeing with the paper's settings, they stand whatever a candidate does
+    alike = costed("ar1_paper", [5.0, 5.02, 4.98], [0.80, 0.801, 0.799], 720.0)
+    assert readings.contact_candidates(defaults + alike + like)["shapes"]["AR-1"]["choice"] == "defaults"
+    # a candidate's run not mixed by its end leaves it open
+    stalled = like + _rows("ar1_candidate_k3200", 2.0, t95=[None], window=[0.6], ends=[8.0])
+    assert readings.contact_candidates(defaults + paper + stalled)["shapes"]["AR-1"]["candidates"][
+        "ar1_candidate_k3200"]["verdict"] == "open"
+
+
 def test_the_contact_decision_tool_refuses_a_folder_that_is_no_archive(tmp_path):
     import subprocess
     import sys
