@@ -4,8 +4,9 @@
 #   - studies/contact_paper.toml: AR-1 and AR-4 MP at 2.0 Umf at the paper's contact stiffness and steps
 #     (three replicas each; about 1.3 and 2.5 core-hours a run);
 #   - studies/stochastic_bed.toml (issue 68: the stochastic drag force in the AR-1 bed, three runs of about 0.4
-#     core-hours), then studies/screening_ar1.toml and studies/screening_ar4.toml: the designed screenings of the
-#     model choices (32 and 32 runs; about 0.27 and 1.4 core-hours a run).
+#     core-hours), then studies/screening_ar1.toml, studies/contact_candidates.toml (AR-1: two cheaper contact
+#     settings against the paper's, three runs each of about 0.7 core-hours) and studies/screening_ar4.toml: the
+#     designed screenings of the model choices (32 and 32 runs; about 0.27 and 1.4 core-hours a run).
 # The paper's stage-2 study (studies/mema2020_stage2.toml) has ended: all 163 runs are in docs/data/mema2020.
 # Start it in the background first thing, from a clone of its own (a work tree being edited would change the
 # code under a running campaign: the workers import it afresh whenever they restart):
@@ -17,6 +18,7 @@
 # and before the machine goes, archive what ended into the repository (from the work tree):
 #   .venv/bin/fvdem study ~/fvdem-runs/contact_paper --archive docs/data/contact_paper
 #   .venv/bin/fvdem study ~/fvdem-runs/screening_ar1 --archive docs/data/screening_ar1
+#   (and so for contact_candidates and screening_ar4 once they have begun)
 # Study folders live outside the work tree (~/fvdem-runs). A machine handed back bare loses only the runs in
 # progress: each study starts with --restore from its archive (the runs held there at their end are copied
 # back and skipped). Extra arguments go to every `fvdem study` (e.g. --until, --supersede).
@@ -56,6 +58,7 @@ contact=$!
 status=0
 [ -f studies/stochastic_bed.toml ] && { study stochastic_bed "$@" || status=$?; }
 study screening_ar1 "$@" || status=$?
+[ -f studies/contact_candidates.toml ] && { study contact_candidates "$@" || status=$?; }
 [ -f studies/screening_ar4.toml ] && { study screening_ar4 "$@" || status=$?; }
 wait $contact || status=$?
 exit $status

@@ -298,3 +298,14 @@ def test_the_generic_report_writes_the_table_alone(tmp_path):
                                     "simulated_seconds", "duration", "replica"}
         else:
             assert {"findings.json", "t95.png"} <= written and "t95" in rows[0] and "void_fraction_binarity" in rows[0]
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "studies").glob("*.toml")), ids=lambda p: p.stem)
+def test_every_study_file_loads_and_names_its_runs_cases_and_beds(path, tmp_path):
+    """Each study file of the repository expands (its families, design, points and beds resolved against its
+    case files) with every run's bed among the study's beds: a file edited for a campaign cannot wait until the
+    campaign's machine to find a typo."""
+    study = load_study(path, tmp_path)
+    beds = {b.name for b in study.beds}
+    assert study.runs and all(r.bed is None or r.bed in beds for r in study.runs)
+    assert len({r.name for r in study.runs}) == len(study.runs)
