@@ -88,6 +88,45 @@ def test_the_first_step_rule_compares_each_later_rise_with_the_first():
     assert readings.largest_change_first(rows, ("ar1", "ar4_mp", "ar4_sp"), "")["verdict"] == "does not hold"
 
 
+def test_the_first_step_rules_error_counts_the_17_umf_mean_twice_where_it_ends_the_later_rise():
+    """With the later rise 1.7 -> 2.0, first - rise = 2 w(1.7) - w(1.6) - w(2.0): the 1.7 Umf mean's variance enters
+    four times (``_rise_error``'s weights). Here the rises (0.30 against 0.15) are told apart with it once (t errors
+    0.08) and not with it four times (0.16): the finding stays open and plans replicas, at 1.7 Umf the most."""
+    assert readings._rise_error([[1.0, 2.0, 3.0], [2.0, 4.0, 6.0]], [1.0, 2.0])[0] == pytest.approx((17 / 3) ** 0.5)
+    windows = {1.6: [0.29, 0.30, 0.31, 0.29, 0.30, 0.31], 1.7: [0.50, 0.55, 0.60, 0.60, 0.65, 0.70],
+               2.0: [0.74, 0.75, 0.76, 0.74, 0.75, 0.76]}
+    rows = [r for v, w in windows.items() for r in _rows("ar1", v, window=w)]
+    once, df = readings._rise_error([windows[1.6], windows[2.0], windows[1.7]])
+    twice, df2 = readings._rise_error([windows[1.6], windows[2.0], windows[1.7]], [1.0, 1.0, 2.0])
+    first, rise = 0.30, 0.15
+    assert first - rise > readings.critical(df) * once and first - rise < readings.critical(df2) * twice
+    finding = readings.largest_change_first(rows, ("ar1",), "")
+    assert finding["verdict"] == "open"
+    (plan,) = finding["plans"]
+    counts = {run["u_over_umf"]: (run["replicas"], run["now"]) for run in plan["runs"]}
+    assert counts[1.7][0] > counts[1.7][1] == 6 and counts[1.7][0] >= max(n for n, _ in counts.values())
+
+
+def test_an_open_second_reading_plans_the_replicas_that_would_tell_it_and_the_plan_file_lists_them():
+    """The entropy-curve reading at 1.7 Umf: AR-4 MP 0.667 against AR-1 0.56 on two runs each (the stage-2 numbers'
+    size) is within the spread; its plan asks more of both, as ``plan_points`` tables; the equivalence reading of
+    "little change" plans replicas at its two velocities."""
+    from fvdem.reports.mema2020.plan import plan_points
+    rows = (_rows("ar4_mp", 1.7, window=[0.62, 0.71]) + _rows("ar1", 1.7, window=[0.50, 0.62])
+            + _rows("ar4_mp", 1.6, window=[0.55, 0.56, 0.54]) + _rows("ar1", 1.6, window=[0.44, 0.45]))
+    finding = readings.entropy_higher(rows, "ar4_mp", "ar1", (1.6, 1.7), "claim", "paper")
+    assert finding["verdict"] == "open" and "would tell" in finding["why"]
+    (plan,) = finding["plans"]
+    assert [(r["family"], r["u_over_umf"], r["now"]) for r in plan["runs"]] == [("ar4_mp", 1.7, 2), ("ar1", 1.7, 2)]
+    assert sum(r["replicas"] - r["now"] for r in plan["runs"]) > 0
+    text = plan_points(rows, [finding], "s")
+    assert text.splitlines().count("[[points]]") == sum(r["replicas"] > r["now"] for r in plan["runs"])
+    assert '"gas.u_over_umf" = 1.7' in text and "in the study already" not in text
+    t95 = (_rows("ar1", 2.3, t95=[3.5, 3.8, 4.1]) + _rows("ar1", 2.9, t95=[3.0, 3.1, 3.2, 3.1, 3.05, 3.15]))
+    little = readings.little_change(t95, "ar1", "paper")
+    assert little["verdict"] == "open" and {r["u_over_umf"] for r in little["plans"][0]["runs"]} == {2.3, 2.9}
+
+
 def test_the_first_rules_verdicts_on_the_committed_archive_are_unchanged_and_the_second_follow_them():
     archive = ROOT / "docs" / "data" / "mema2020"
     rows = [r for r in json.loads((archive / "table.json").read_text()) if r["status"] != "not planned"]

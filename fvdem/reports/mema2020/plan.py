@@ -86,8 +86,9 @@ def plan_points(rows, findings, study: str | None = None) -> str:
                 add = run["replicas"] - run["now"] - way
                 said = (f"{finding['finding']}: {run['replicas']} of {base} at {v:g} Umf in all (now {run['now']}"
                         + (f", {way} on the way" if way else "") + ")")
-                if add <= 0:
-                    queued.append(said)
+                if add <= 0:  # enough so far (a plan adds to its other series), or on their way: listed
+                    if way:
+                        queued.append(said)
                     continue
                 family = _plan_family(base, v, plan["kind"], present) or base
                 table = tables.setdefault((family, v), {"from": present.get((family, v), 0), "replicas": 0,

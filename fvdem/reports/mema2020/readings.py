@@ -15,8 +15,10 @@ from __future__ import annotations
 import math
 
 from .families import by_velocity, expansion_runs, row_ended, t95_runs, tall_columns, told_rows
-from .rules import LATER_READINGS, compare
-from .spread import critical, margin_words, order_margin, sample_variance, satterthwaite, told_alike
+from .plan import T95, plan_record
+from .rules import LATER_READINGS, _replica_cost, compare
+from .spread import (CLOSE, critical, margin_words, order_margin, replicas_to_tell, sample_variance, satterthwaite,
+                     to_tell, told_alike)
 from .table import ENTROPY_TIMES
 
 FIXED = "2026-12-07"  # the date these rules were committed, before stage 3's first run
@@ -56,23 +58,46 @@ def _curves(rows, family, v) -> dict:
     return out
 
 
-def _verdict(claim: str, told: dict, untold: list, values: dict, rule: str, paper: str) -> dict:
+def _verdict(claim: str, told: dict, untold: list, values: dict, rule: str, paper: str,
+             plans: list | None = None) -> dict:
     """One finding: ``told`` velocity -> whether the claim holds there; one told against decides; untold ones
-    leave it open; else it holds."""
+    leave it open (with ``plans``, the replicas that would tell them as data: ``_plan``); else it holds."""
     base = {"finding": claim, "values": values, "rule": f"{rule}; the paper: {paper}", "readings": "second",
             "fixed": FIXED}
     if told and not all(told.values()):
         return {**base, "verdict": "does not hold"}
     if untold or not told:
-        return {**base, "verdict": "open", "why": "; ".join(untold) or "no velocity where both ran"}
+        return {**base, "verdict": "open", "why": "; ".join(untold) or "no velocity where both ran",
+                **({"plans": list(plans)} if plans else {})}
     return {**base, "verdict": "holds"}
+
+
+def _plan(rows, groups: list, difference: float, margin: float | None, plans: list, weights=None) -> str:
+    """The replicas that would tell an untold difference of (weighted) group means, if the means and spread stay
+    (``replicas_to_tell``: the difference with t errors clear of 0, or of ``margin`` where likeness decides too),
+    appended to ``plans`` as data (``plan_record``, replicas of the runs the t95 findings count: a family's
+    "<family>_t95" runs where the study has them); ``groups``: ``(family, U/Umf, values)`` each, ``weights``
+    their coefficients in the difference (a group's variance enters times its weight squared). Returns the
+    words ("about 3 of ar1 at 1.7 Umf and ... in all would tell ...")."""
+    weights = weights or [1.0] * len(groups)
+    known = [sample_variance(x) for _, _, x in groups if len(x) > 1 and sample_variance(x) > 0]
+    if not known:
+        return "more replicas would tell"
+    series = [(len(x), w * w * (sample_variance(x) if len(x) > 1 and sample_variance(x) > 0 else max(known)),
+               _replica_cost(rows, family, v)) for (family, v, x), w in zip(groups, weights)]
+    plan = replicas_to_tell(series, difference, margin)
+    named = [(f"{family} at {v:g} Umf", len(x), cost) for (family, v, x), (_, _, cost) in zip(groups, series)]
+    if plan:
+        plans.append(plan_record(plan, [(family, v, len(x), cost) for (family, v, x), (_, _, cost)
+                                        in zip(groups, series)], T95))
+    return to_tell(plan, named)
 
 
 def entropy_higher(rows, higher: str, lower: str, velocities: tuple, claim: str, paper: str) -> dict:
     """``higher``'s entropy curves stand above ``lower``'s at each of ``velocities`` (where both ran): the mean
     window entropy told higher; told lower or alike decides against."""
     a, b = _window(rows, higher), _window(rows, lower)
-    told, untold, values = {}, [], {}
+    told, untold, values, plans = {}, [], {}, []
     for v in velocities:
         if not a.get(v) or not b.get(v):
             if v in a or v in b:
@@ -83,15 +108,17 @@ def entropy_higher(rows, higher: str, lower: str, velocities: tuple, claim: str,
                             lower: {"window": _mean(b[v]), "runs": len(b[v]), **_curves(rows, lower, v)},
                             "order": order or "untold"}
         if order is None:
-            untold.append(f"{v:g} Umf: the window means {_mean(a[v]):.3g} and {_mean(b[v]):.3g} within their "
-                          "spread (more replicas)")
+            means = _mean(a[v]), _mean(b[v])
+            how = _plan(rows, [(higher, v, a[v]), (lower, v, b[v])], means[0] - means[1], CLOSE * max(means), plans)
+            untold.append(f"{v:g} Umf: the window means {means[0]:.3g} and {means[1]:.3g} within their spread "
+                          f"({how})")
         else:
             told[v] = order == "higher"
     rule = (f"each run's mixing entropy averaged over 1-8 s (every 0.5 s; a run that ended mixed holds its last "
             f"value): the mean of {higher}'s replicas above {lower}'s by more than t standard errors "
             f"({margin_words()}) at each of {', '.join(f'{v:g}' for v in velocities)} Umf; told below, or alike "
             "(the difference with t errors within 10 % of the larger), decides against")
-    return _verdict(claim, told, untold, values, rule, paper)
+    return _verdict(claim, told, untold, values, rule, paper, plans)
 
 
 def little_change(rows, family: str, paper: str) -> dict:
@@ -122,8 +149,10 @@ def little_change(rows, family: str, paper: str) -> dict:
         return _verdict(claim, {hi: True}, [], values, rule, paper)
     if difference - k * error > bound:
         return _verdict(claim, {hi: False}, [], values, rule, paper)
+    plans = []
+    how = _plan(rows, [(family, hi, t[hi]), (family, lo, t[lo])], difference - bound, None, plans)
     return _verdict(claim, {}, [f"{difference:.3g} s between {hi:g} and {lo:g} Umf, +- {k * error:.3g} s, about "
-                                f"the {bound:.3g} s bound (more replicas)"], values, rule, paper)
+                                f"the {bound:.3g} s bound ({how})"], values, rule, paper, plans)
 
 
 def dense_expansion(rows, paper: str) -> dict:
@@ -153,7 +182,7 @@ def largest_change_first(rows, families: tuple, paper: str) -> dict:
     mean window entropy from 1.6 to 1.7 Umf larger than each later rise between neighbouring velocities, told by
     the t errors of the two rises' difference."""
     claim = "the largest change of mixing is from 1.6 to 1.7 Umf (Fig. 2)"
-    told, untold, values = {}, [], {}
+    told, untold, values, plans = {}, [], {}, []
     for family in families:
         w = {v: x for v, x in _window(rows, family).items() if x}
         if 1.6 not in w or 1.7 not in w:
@@ -163,38 +192,45 @@ def largest_change_first(rows, families: tuple, paper: str) -> dict:
         first = _mean(w[1.7]) - _mean(w[1.6])
         velocities = sorted(v for v in w if v >= 1.7)
         values[family] = {"1.6 -> 1.7": first}
-        verdicts = []
+        verdicts, hows = [], []
         for lo, hi in zip(velocities, velocities[1:]):
             rise = _mean(w[hi]) - _mean(w[lo])
-            groups = [w[1.7], w[1.6], w[hi], w[lo]] if lo != 1.7 else [w[1.6], w[hi], w[1.7]]
-            error, df = _rise_error(groups)
+            # first - rise = w17 - w16 - whi + wlo; with lo = 1.7 the 1.7 mean enters twice: 2 w17 - w16 - whi
+            at, weights = ([1.7, 1.6, hi, lo], [1.0, 1.0, 1.0, 1.0]) if lo != 1.7 else ([1.6, hi, 1.7], [1.0, 1.0, 2.0])
+            groups = [w[v] for v in at]
+            error, df = _rise_error(groups, weights)
             values[family][f"{lo:g} -> {hi:g}"] = rise
             if error is None:
                 verdicts.append(None)
                 continue
             k = critical(df)
             verdicts.append(True if first - rise > k * error else False if rise - first > k * error else None)
+            if verdicts[-1] is None:
+                hows.append(f"{lo:g} -> {hi:g}: " + _plan(rows, [(family, v, w[v]) for v in at], first - rise, None,
+                                                           plans, weights))
         if False in verdicts:
             told[family] = False
         elif None in verdicts or not verdicts:
-            untold.append(f"{family}: a later rise within the noise of the first (more replicas)")
+            untold.append(f"{family}: a later rise within the noise of the first ({'; '.join(hows) or 'more replicas'})")
         else:
             told[family] = True
     rule = ("in each family, the mean window entropy's rise from 1.6 to 1.7 Umf larger than each rise between later "
             f"neighbouring velocities by more than t standard errors of their difference ({margin_words()}); one "
             "later rise told larger decides against")
-    return _verdict(claim, told, untold, values, rule, paper)
+    return _verdict(claim, told, untold, values, rule, paper, plans)
 
 
-def _rise_error(groups: list) -> tuple[float | None, float | None]:
-    """The standard error of a difference of sums of independent group means (each group once; a group of one
-    run borrows the largest sample variance of the others) and its Welch-Satterthwaite degrees of freedom."""
+def _rise_error(groups: list, weights=None) -> tuple[float | None, float | None]:
+    """The standard error of a weighted sum of independent group means (``weights``: each group's coefficient,
+    1 by default; its variance enters times the weight squared; a group of one run borrows the largest sample
+    variance of the others) and its Welch-Satterthwaite degrees of freedom."""
+    weights = weights or [1.0] * len(groups)
     variances = [sample_variance(g) if len(g) > 1 else None for g in groups]
     known = [v for v in variances if v]
     if not known:
         return None, None
     variances = [v if v else max(known) for v in variances]
-    terms = [v / len(g) for v, g in zip(variances, groups)]
+    terms = [w * w * v / len(g) for v, g, w in zip(variances, groups, weights)]
     dfs = [max(len(g) - 1, 1) for g in groups]
     return math.sqrt(sum(terms)), satterthwaite(terms, dfs)
 
@@ -207,7 +243,7 @@ def larger_drop(rows, paper: str) -> dict:
     rule = ("mean t95 at 1.6 Umf less at 2.0 Umf, AR-1's larger than AR-4 MP's by more than t standard errors of the "
             f"difference ({margin_words()}); a fall with unmixed runs at 1.6 Umf (counted at their end) is a lower "
             "bound: it decides only where it passes the other fall so")
-    falls, values, groups = {}, {}, []
+    falls, values, groups, at = {}, {}, [], []
     for family in ("ar1", "ar4_mp"):
         t, ends = by_velocity(rows, family, "t95"), by_velocity(rows, family, "simulated_seconds")
         if 1.6 not in t or 2.0 not in t or None in t[2.0]:
@@ -220,6 +256,7 @@ def larger_drop(rows, paper: str) -> dict:
         bounded = None in t[1.6]
         falls[family] = (_mean(low) - _mean(t[2.0]), bounded)
         groups += [low, t[2.0]]
+        at += [(family, 1.6), (family, 2.0)]
         values[family] = {"fall": falls[family][0], "lower bound": bounded, "runs": [len(low), len(t[2.0])]}
     error, df = _rise_error(groups)
     if error is None:
@@ -231,7 +268,12 @@ def larger_drop(rows, paper: str) -> dict:
         return _verdict(claim, {2.0: True}, [], values, rule, paper)
     if b - a > k * error and not a_bound:
         return _verdict(claim, {2.0: False}, [], values, rule, paper)
-    return _verdict(claim, {}, ["the falls within their noise, or the larger only bounded"], values, rule, paper)
+    if a_bound or b_bound:  # a bound needs longer runs at 1.6 Umf, not replicas
+        return _verdict(claim, {}, ["the falls within their noise, or the larger only bounded (longer runs at 1.6 "
+                                    "Umf)"], values, rule, paper)
+    plans = []
+    how = _plan(rows, [(f, v, x) for (f, v), x in zip(at, groups)], a - b, None, plans, [1.0, -1.0, -1.0, 1.0])
+    return _verdict(claim, {}, [f"the falls within their noise ({how})"], values, rule, paper, plans)
 
 
 PAPER = {
