@@ -180,6 +180,30 @@ def test_rolling_friction_decelerates_rolling_sphere():
     assert v == pytest.approx(v0 - 5 / 7 * mu_r * 9.81 * t, rel=0.02)
 
 
+@pytest.mark.parametrize("mu_r", [0.05, 0.46])
+def test_rolling_friction_decelerates_a_rod_rolling_on_its_side(mu_r):
+    """A spherocylinder (3 x 12 mm, the paper's AR-4 rod) lying on the floor and rolling about its own axis rests on
+    both cap ends, each carrying half its weight and each resisting the roll with ``mu_r r F_n``: the torques sum
+    to ``mu_r r m g``, which dissipates ``mu_r m g v``; with ``E = (m + I_axis / r^2) v^2 / 2`` it decelerates at
+    ``mu_r g m / (m + I_axis / r^2)`` (energy balance), rolling without slip and without turning."""
+    r, h = 1.5e-3, 4.5e-3
+    contact = paper_contact(friction=0.5, rolling_friction=mu_r)
+    v0, t = 0.3, 0.02
+    s = make_system([[0.05, 0.05, r]], r, h, velocity=[[v0, 0, 0]], axis=[[0.0, 1.0, 0.0]], contact=contact,
+                    gravity=(0, 0, -9.81), box=Box((0.0, 0.0, 0.0), (1.0, 0.1, 0.1), (False, False, False)))
+    p = s.particles
+    m, i_axis = p.mass[0], p.inertia[0].min()
+    p.position[0, 2] = r - m * 9.81 / 2 / contact.normal_stiffness  # each end's static overlap
+    p.angular_momentum[0, 1] = i_axis * v0 / r
+    s.reference_position[:] = p.position
+    s.compute_forces()
+    s.step(int(t / s.dt))
+    expected = v0 - mu_r * 9.81 * m / (m + i_axis / r ** 2) * t
+    v, w = by_id(s, "velocity")[0], by_id(s, "angular_velocity")[0]
+    assert abs(v[0] - expected) < 1e-3 * (v0 - expected)
+    assert w[1] * r == pytest.approx(v[0], rel=1e-4) and abs(by_id(s, "axis")[0, 1]) == pytest.approx(1.0)
+
+
 def test_newton_third_law_and_angular_momentum_pair_by_pair():
     """Random overlapping spherocylinder pairs with random motion: the two forces are exact
     negatives and the torques cancel the moment of the force couple (a contact creates no momentum
