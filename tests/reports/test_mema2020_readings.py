@@ -91,13 +91,13 @@ def test_the_first_step_rule_compares_each_later_rise_with_the_first():
 def test_the_first_step_rules_error_counts_the_17_umf_mean_twice_where_it_ends_the_later_rise():
     """With the later rise 1.7 -> 2.0, first - rise = 2 w(1.7) - w(1.6) - w(2.0): the 1.7 Umf mean's variance enters
     four times (``_rise_error``'s weights). Here the rises (0.30 against 0.15) are told apart with it once (t errors
-    0.08) and not with it four times (0.16): the finding stays open and plans replicas, at 1.7 Umf the most."""
+    0.076) and not with it four times (0.153): the finding stays open and plans replicas, at 1.7 Umf the most."""
     assert readings._rise_error([[1.0, 2.0, 3.0], [2.0, 4.0, 6.0]], [1.0, 2.0])[0] == pytest.approx((17 / 3) ** 0.5)
     windows = {1.6: [0.29, 0.30, 0.31, 0.29, 0.30, 0.31], 1.7: [0.50, 0.55, 0.60, 0.60, 0.65, 0.70],
                2.0: [0.74, 0.75, 0.76, 0.74, 0.75, 0.76]}
     rows = [r for v, w in windows.items() for r in _rows("ar1", v, window=w)]
     once, df = readings._rise_error([windows[1.6], windows[2.0], windows[1.7]])
-    twice, df2 = readings._rise_error([windows[1.6], windows[2.0], windows[1.7]], [1.0, 1.0, 2.0])
+    twice, df2 = readings._rise_error([windows[1.6], windows[2.0], windows[1.7]], [-1.0, -1.0, 2.0])
     first, rise = 0.30, 0.15
     assert first - rise > readings.critical(df) * once and first - rise < readings.critical(df2) * twice
     finding = readings.largest_change_first(rows, ("ar1",), "")
@@ -154,15 +154,17 @@ def test_the_contact_settings_rule_tells_differ_agree_or_open():
 def test_the_contact_candidates_rule_chooses_the_cheapest_that_reproduces_the_papers_change():
     """studies/contact_candidates.toml's rule on known numbers: the defaults (t95 5) differ from the paper's settings
     (7); a candidate told apart from the paper's differs; one between both, told from neither, is open; one like the
-    paper's agrees, and of two agreeing the cheaper (CPU s per simulated s) is the choice."""
-    def costed(family, t95, window, cpu):
-        return [{**r, "cpu_seconds": cpu * r["simulated_seconds"]}
-                for r in _rows(family, 2.0, t95=t95, window=window, ends=[8.0] * len(t95))]
-    defaults = costed("ar1_t95", [5.0, 5.1, 4.9, 5.05, 4.95, 5.0, 5.1, 4.9], [0.80] * 8, 190.0)
+    paper's agrees, and of two agreeing the cheaper (CPU s per simulated s) is the choice, if cheaper than the
+    paper's own."""
+    def costed(family, t95, window, cpu, ends=None):
+        return [{**r, "cpu_seconds": None if cpu is None else cpu * r["simulated_seconds"]}
+                for r in _rows(family, 2.0, t95=t95, window=window, ends=ends or [8.0] * len(t95))]
+    defaults = costed("ar1_t95", [5.0, 5.1, 4.9, 5.05, 4.95, 5.0, 5.1, 4.9],
+                      [0.80, 0.81, 0.79, 0.80, 0.805, 0.795, 0.80, 0.80], 190.0)
     paper = costed("ar1_paper", [7.0, 7.1, 6.9], [0.70, 0.71, 0.69], 720.0)
     like = costed("ar1_candidate_k3200", [6.95, 7.05, 7.0], [0.70, 0.705, 0.695], 340.0)
     cheaper_like = costed("ar1_candidate_cfd", [7.0, 6.9, 7.1], [0.71, 0.70, 0.70], 300.0)
-    unlike = costed("ar1_candidate_soft", [5.0, 5.05, 4.95], [0.80, 0.80, 0.80], 200.0)
+    unlike = costed("ar1_candidate_soft", [5.0, 5.05, 4.95], [0.80, 0.805, 0.795], 200.0)
     between = costed("ar1_candidate_mid", [5.0, 7.0, 9.0], [0.6, 0.75, 0.9], 250.0)
     result = readings.contact_candidates(defaults + paper + like + unlike + between)["shapes"]["AR-1"]
     assert result["contact_settings"] == "differ"
@@ -174,13 +176,38 @@ def test_the_contact_candidates_rule_chooses_the_cheapest_that_reproduces_the_pa
     assert both["choice"] == "ar1_candidate_cfd"  # the cheaper of two agreeing
     assert readings.contact_candidates(defaults + paper + unlike)["shapes"]["AR-1"]["choice"] == "ar1_paper"
     assert readings.contact_candidates(defaults + paper + between)["shapes"]["AR-1"]["choice"] is None
-    # the defaults agreeing with the paper's settings, they stand whatever a candidate does
+    # agreeing at no saving: the paper's own; an agreeing candidate of unknown cost decides nothing yet
+    dear = costed("ar1_candidate_k3200", [6.95, 7.05, 7.0], [0.70, 0.705, 0.695], 900.0)
+    assert readings.contact_candidates(defaults + paper + dear)["shapes"]["AR-1"]["choice"] == "ar1_paper"
+    unknown = costed("ar1_candidate_k3200", [6.95, 7.05, 7.0], [0.70, 0.705, 0.695], None)
+    assert readings.contact_candidates(defaults + paper + unknown)["shapes"]["AR-1"]["choice"] is None
+    # the change reproduced on one measure suffices (t95 like the paper's, the window told from neither)
+    one = costed("ar1_candidate_one", [6.9, 7.0, 7.1], [0.65, 0.75, 0.85], 300.0)
+    assert readings.contact_candidates(defaults + paper + one)["shapes"]["AR-1"]["candidates"][
+        "ar1_candidate_one"]["verdict"] == "agrees"
+    # told from the defaults the other way than the paper's settings: not the paper's change
+    wrong = costed("ar1_candidate_fast", [6.0, 7.5, 9.0], [0.86, 0.87, 0.85], 300.0)
+    entry = readings.contact_candidates(defaults + paper + wrong)["shapes"]["AR-1"]["candidates"]["ar1_candidate_fast"]
+    assert entry["mixing_entropy_window"]["against_defaults"] == "higher" and entry["verdict"] != "agrees"
+    # the defaults agreeing with the paper's settings, they stand whatever a candidate does; undecided, none yet
     alike = costed("ar1_paper", [5.0, 5.02, 4.98], [0.80, 0.801, 0.799], 720.0)
     assert readings.contact_candidates(defaults + alike + like)["shapes"]["AR-1"]["choice"] == "defaults"
-    # a candidate's run not mixed by its end leaves it open
-    stalled = like + _rows("ar1_candidate_k3200", 2.0, t95=[None], window=[0.6], ends=[8.0])
-    assert readings.contact_candidates(defaults + paper + stalled)["shapes"]["AR-1"]["candidates"][
-        "ar1_candidate_k3200"]["verdict"] == "open"
+    stalled = costed("ar1_paper", [7.0, None], [0.70, 0.60], 720.0)  # a paper's run unmixed at 8 s: open
+    assert readings.contact_candidates(defaults + stalled + like)["shapes"]["AR-1"]["contact_settings"] == "open"
+    assert readings.contact_candidates(defaults + stalled + like)["shapes"]["AR-1"]["choice"] is None
+    # a run unmixed at its end (10 s) is a lower bound: above the paper's it differs, else it leaves t95 unknown
+    late = costed("ar1_candidate_k3200", [9.8, 9.9, None], [0.60, 0.61, 0.59], 340.0, ends=[10.0] * 3)
+    entry = readings.contact_candidates(defaults + paper + late)["shapes"]["AR-1"]["candidates"]["ar1_candidate_k3200"]
+    assert entry["verdict"] == "differs" and entry["t95"]["candidate"] == pytest.approx(9.9)
+    near = costed("ar1_candidate_k3200", [6.95, 7.05, None], [0.70, 0.705, 0.695], 340.0, ends=[10.0] * 3)
+    entry = readings.contact_candidates(defaults + paper + near)["shapes"]["AR-1"]["candidates"]["ar1_candidate_k3200"]
+    assert entry["verdict"] == "open" and "lower bound" in entry["why"]
+    # a run on its way counts nowhere (no t95 yet is not unmixed)
+    going = [{**r, "status": "running", "t95": None} for r in costed("ar1_candidate_k3200", [7.0], [0.7], 340.0)]
+    assert readings.contact_candidates(defaults + paper + like + going)["shapes"]["AR-1"]["choice"] == \
+        "ar1_candidate_k3200"
+    paper_going = [{**r, "status": "running", "t95": None} for r in costed("ar1_paper", [7.0], [0.7], 720.0)]
+    assert readings.contact_settings(defaults + paper + paper_going)["shapes"]["AR-1"]["verdict"] == "differ"
 
 
 def test_the_contact_decision_tool_refuses_a_folder_that_is_no_archive(tmp_path):

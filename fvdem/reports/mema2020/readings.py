@@ -196,7 +196,8 @@ def largest_change_first(rows, families: tuple, paper: str) -> dict:
         for lo, hi in zip(velocities, velocities[1:]):
             rise = _mean(w[hi]) - _mean(w[lo])
             # first - rise = w17 - w16 - whi + wlo; with lo = 1.7 the 1.7 mean enters twice: 2 w17 - w16 - whi
-            at, weights = ([1.7, 1.6, hi, lo], [1.0, 1.0, 1.0, 1.0]) if lo != 1.7 else ([1.6, hi, 1.7], [1.0, 1.0, 2.0])
+            at, weights = ([1.7, 1.6, hi, lo], [1.0, -1.0, -1.0, 1.0]) if lo != 1.7 else ([1.6, hi, 1.7],
+                                                                                         [-1.0, -1.0, 2.0])
             groups = [w[v] for v in at]
             error, df = _rise_error(groups, weights)
             values[family][f"{lo:g} -> {hi:g}"] = rise
@@ -332,8 +333,9 @@ def contact_settings(rows: list, velocity: float = 2.0) -> dict:
     defaults move to the cheapest settings that agree); alike on both (the equivalence test, 10 %): "agree" (the
     defaults stand); else "open" (more replicas at the paper's settings). The dense bed's expansion and the
     overlaps' 99th percentile are shown beside them, not judged. Fixed on 2026-12-07 before any run at the
-    paper's settings had ended (issue 66, item 3)."""
-    rows = t95_runs(rows)
+    paper's settings had ended (issue 66, item 3). Runs count once ended (a run on its way has no t95 yet, which is
+    not a run unmixed by its end)."""
+    rows = [r for r in t95_runs(rows) if row_ended(r)]
     out = {"rule": "per shape at 2.0 Umf: t95 and the mixing entropy averaged over 1-8 s of the runs at the paper's "
                    f"settings against the defaults' replicas, each by Welch's t ({margin_words()}); told apart on "
                    "either: differ; alike on both (the difference with t errors within 10 % of the larger): agree; "
@@ -376,62 +378,76 @@ def contact_candidates(rows: list, velocity: float = 2.0) -> dict:
     """Which cheaper contact settings agree with the paper's (``studies/contact_candidates.toml``), per shape at
     ``velocity``: each candidate family ``<defaults>_candidate_<label>`` against the paper's settings
     (``ar1_paper``, ``ar4_mp_paper``) and the defaults' replicas, on t95 and the window entropy (1-8 s), each by
-    Welch's t (``_order``). A candidate **differs** where either is told apart from the paper's; it **agrees**
-    where neither is and at least one is told apart from the defaults in the direction the paper's settings are
-    (it reproduces the change, not just a spread wide enough to hold both); else it is **open** (more runs), and
-    so is one with a run not mixed by its end. The settings the study's defaults move to (``choice``), where
-    ``contact_settings`` reads "differ": the agreeing candidate of the lowest CPU seconds per simulated second; none
-    agreeing and every candidate differing, the paper's own; else none yet. Where it reads "agree", the defaults
-    stand; "open", none yet. "Agree within the spread" is not the equivalence test ``contact_settings`` asks of the
-    defaults (within 10 % of the larger mean): at these spreads (SD 12 % of t95) that needs a dozen runs a side.
-    Fixed on 2026-12-07 before any candidate's run (issue 66, item 3)."""
+    Welch's t (``_order``), over the runs that have ended. A candidate **differs** where either is told apart from
+    the paper's; it **agrees** where neither is and at least one is told apart from the defaults in the direction
+    the paper's settings are (it reproduces the change, not just a spread wide enough to hold both); else it is
+    **open** (more runs). A candidate's run not mixed by its end counts at its end in t95, a lower bound: told
+    above the paper's so it differs; else its t95 is unknown and it cannot agree (open, unless its window entropy
+    differs). The settings the study's defaults move to (``choice``), where ``contact_settings`` reads "differ":
+    of the agreeing candidates cheaper than the paper's settings (CPU seconds per simulated second), the cheapest;
+    none such and every candidate differing or dearer, the paper's own; an agreeing candidate of unknown cost, or
+    the paper's cost unknown, decides nothing yet (None). Where it reads "agree", the defaults stand; "open",
+    none yet. "Agree within the spread" is not the equivalence test ``contact_settings`` asks of the defaults
+    (within 10 % of the larger mean): at these spreads (SD 12 % of t95) that needs a dozen runs a side. Fixed on
+    2026-12-07 before any candidate's run (issue 66, item 3)."""
     decided = contact_settings(rows, velocity)
-    rows = t95_runs(rows)
-    out = {"rule": "per shape at 2.0 Umf, each candidate's t95 and mixing entropy averaged over 1-8 s against the "
-                   f"paper's settings and the defaults' replicas, each by Welch's t ({margin_words()}); told apart "
-                   "from the paper's on either: differs; on neither, and told apart from the defaults on one in the "
-                   "paper's direction: agrees; else open. The study's defaults move to the cheapest agreeing "
-                   "candidate (CPU s per simulated s) where the defaults differ from the paper's; to the paper's own "
-                   "where every candidate differs", "fixed": FIXED, "shapes": {}}
+    rows = [r for r in t95_runs(rows) if row_ended(r)]
+    out = {"rule": "per shape at 2.0 Umf, each candidate's t95 (a run unmixed by its end counted at its end, a lower "
+                   "bound) and mixing entropy averaged over 1-8 s against the paper's settings and the defaults' "
+                   f"replicas, each by Welch's t ({margin_words()}); told apart from the paper's on either: differs; "
+                   "on neither, t95 known, and told apart from the defaults on one in the paper's direction: "
+                   "agrees; else open. The study's defaults move to the cheapest agreeing candidate cheaper than the "
+                   "paper's settings (CPU s per simulated s) where the defaults differ from the paper's; to the "
+                   "paper's own where every candidate differs or costs more", "fixed": FIXED, "shapes": {}}
     for shape, (defaults, paper) in SHAPES.items():
         verdict = decided["shapes"][shape]["verdict"]
         families = sorted({r["family"] for r in rows if r["family"].startswith(defaults + CANDIDATE)})
-        entry = {"contact_settings": verdict, "paper_cost": _cost(rows, paper, velocity),
+        paper_cost = _cost(rows, paper, velocity)
+        entry = {"contact_settings": verdict, "paper_cost": paper_cost,
                  "defaults_cost": _cost(rows, defaults, velocity), "candidates": {}}
         for family in families:
             c = {"cost": _cost(rows, family, velocity)}
-            reproduces = []
-            told_from_paper = False
+            ends = by_velocity(rows, family, "simulated_seconds").get(velocity, [])
+            t95 = by_velocity(rows, family, "t95").get(velocity, [])
+            unmixed = sum(x is None for x in t95)
+            reproduces, told_from_paper = [], False
             for key in ("t95", "mixing_entropy_window"):
-                x, p, d = ([v for v in by_velocity(rows, f, key).get(velocity, []) if v is not None]
-                           for f in (family, paper, defaults))
+                if key == "t95":  # a run unmixed by its end at its end: a lower bound
+                    x = [v if v is not None else e for v, e in zip(t95, ends) if v is not None or e is not None]
+                else:
+                    x = [v for v in by_velocity(rows, family, key).get(velocity, []) if v is not None]
+                p, d = ([v for v in by_velocity(rows, f, key).get(velocity, []) if v is not None]
+                        for f in (paper, defaults))
                 to_paper = (_order(x, p) or "untold") if x and p else "no runs"
                 to_defaults = (_order(x, d) or "untold") if x and d else "no runs"
                 paper_way = (_order(p, d) or "untold") if p and d else "no runs"
+                if key == "t95" and unmixed and to_paper != "higher":  # a bound tells only "above"
+                    to_paper = to_defaults = "untold (lower bound)"
                 c[key] = {"candidate": _mean(x) if x else None, "runs": len(x), "against_paper": to_paper,
                           "against_defaults": to_defaults, "paper_against_defaults": paper_way}
                 told_from_paper |= to_paper in ("higher", "lower")
                 reproduces.append(to_defaults in ("higher", "lower") and to_defaults == paper_way)
-            unmixed = [v for v in by_velocity(rows, family, "t95").get(velocity, []) if v is None]
-            if unmixed:
-                c["verdict"], c["why"] = "open", f"{len(unmixed)} run(s) not mixed by their end"
-            elif told_from_paper:
+            if told_from_paper:
                 c["verdict"] = "differs"
+            elif unmixed:
+                c["verdict"], c["why"] = "open", f"{unmixed} run(s) not mixed by their end: t95 a lower bound"
             elif any(reproduces):
                 c["verdict"] = "agrees"
             else:
                 c["verdict"] = "open"
             entry["candidates"][family] = c
-        agreeing = [f for f, c in entry["candidates"].items() if c["verdict"] == "agrees"]
+        agreeing = {f: c["cost"] for f, c in entry["candidates"].items() if c["verdict"] == "agrees"}
         if verdict == "agree":
             entry["choice"] = "defaults"
         elif verdict != "differ":
             entry["choice"] = None
-        elif agreeing:
-            entry["choice"] = min(agreeing, key=lambda f: (entry["candidates"][f]["cost"] is None,
-                                                            entry["candidates"][f]["cost"] or 0.0))
-        elif families and all(c["verdict"] == "differs" for c in entry["candidates"].values()):
-            entry["choice"] = paper
+        elif agreeing and (paper_cost is None or None in agreeing.values()):
+            entry["choice"], entry["why"] = None, "an agreeing candidate's or the paper's cost is not known"
+        elif any(cost < paper_cost for cost in agreeing.values()):
+            entry["choice"] = min((f for f, cost in agreeing.items() if cost < paper_cost), key=agreeing.get)
+        elif families and all(c["verdict"] == "differs" or c["verdict"] == "agrees"
+                              for c in entry["candidates"].values()):
+            entry["choice"] = paper  # every candidate differs, or agrees at no saving
         else:
             entry["choice"] = None
         out["shapes"][shape] = entry
