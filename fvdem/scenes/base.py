@@ -88,19 +88,21 @@ class Scene:
     def keeps_history(self) -> bool:
         return any(o.keeps_history for o in self.observables)
 
-    @property
-    def plots(self) -> tuple:
+    def _declared(self, kind: str) -> tuple:
+        """"timeseries" (every run's common diagnostics), then each observable's own names of ``kind``
+        (``"plots"`` or ``"comparisons"``), each once, in the observables' order."""
         names = ["timeseries"]
         for observable in self.observables:
-            names += [p for p in observable.plots if p not in names]
+            names += [n for n in getattr(observable, kind) if n not in names]
         return tuple(names)
 
     @property
+    def plots(self) -> tuple:
+        return self._declared("plots")
+
+    @property
     def comparisons(self) -> tuple:
-        names = ["timeseries"]
-        for observable in self.observables:
-            names += [c for c in observable.comparisons if c not in names]
-        return tuple(names)
+        return self._declared("comparisons")
 
 
 @dataclass(frozen=True)
@@ -131,31 +133,30 @@ def scene_for(case) -> Scene:
     raise ValueError(f"no registered scene applies to case {case.name!r}; registered: {', '.join(SCENES)}")
 
 
+def _declared_by(out, kind: str, every) -> tuple:
+    """The names of ``kind`` (``"plots"``, ``"comparisons"``) a run folder's scene declares, from its case.toml;
+    without a readable case (none, or one this version no longer reads), ``every`` registered one."""
+    from pathlib import Path
+
+    from ..case import CaseError, load_case
+    try:
+        return getattr(scene_for(load_case(Path(out) / "case.toml")), kind)
+    except (CaseError, OSError):
+        return tuple(every)
+
+
 def plots_of(out) -> tuple:
     """The plots (``fvdem.analysis.plots.PLOTS`` names) a run folder's scene declares, from its case.toml;
     without a readable case, every plot."""
-    from pathlib import Path
-
     from ..analysis.plots import PLOTS
-    from ..case import CaseError, load_case
-    try:
-        return scene_for(load_case(Path(out) / "case.toml")).plots
-    except (CaseError, OSError):  # no case file, or one this version no longer reads
-        return tuple(PLOTS)
+    return _declared_by(out, "plots", PLOTS)
 
 
 def comparisons_of(runs) -> tuple:
     """The comparisons (``fvdem.analysis.compare.COMPARISONS`` names) the run folders' scenes declare, from
     their case.toml files, in the first run's order; a folder without a readable case adds every one."""
-    from pathlib import Path
-
     from ..analysis.compare import COMPARISONS
-    from ..case import CaseError, load_case
     names = []
     for run in runs:
-        try:
-            declared = scene_for(load_case(Path(run) / "case.toml")).comparisons
-        except (CaseError, OSError):  # no case file, or one this version no longer reads
-            declared = tuple(COMPARISONS)
-        names += [n for n in declared if n not in names]
+        names += [n for n in _declared_by(run, "comparisons", COMPARISONS) if n not in names]
     return tuple(names)

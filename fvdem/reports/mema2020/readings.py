@@ -16,7 +16,7 @@ import math
 
 from .families import by_velocity, expansion_runs, row_ended, t95_runs, tall_columns, told_rows
 from .plan import T95, plan_record
-from .rules import LATER_READINGS, _replica_cost, compare
+from .rules import LATER_READINGS, compare, replica_cost
 from .spread import (CLOSE, critical, margin_words, order_margin, replicas_to_tell, sample_variance, satterthwaite,
                      to_tell, told_alike)
 from .table import ENTROPY_TIMES
@@ -84,7 +84,7 @@ def _plan(rows, groups: list, difference: float, margin: float | None, plans: li
     if not known:
         return "more replicas would tell"
     series = [(len(x), w * w * (sample_variance(x) if len(x) > 1 and sample_variance(x) > 0 else max(known)),
-               _replica_cost(rows, family, v)) for (family, v, x), w in zip(groups, weights)]
+               replica_cost(rows, family, v)) for (family, v, x), w in zip(groups, weights)]
     plan = replicas_to_tell(series, difference, margin)
     named = [(f"{family} at {v:g} Umf", len(x), cost) for (family, v, x), (_, _, cost) in zip(groups, series)]
     if plan:

@@ -17,7 +17,7 @@ from .spread import (CLOSE, SPREAD, critical, degrees_of_freedom, difference_err
 from .table import DENSE, WINDOW, WINDOW_START
 
 
-def _replica_cost(rows, family: str, v, column: str | None = None) -> float | None:
+def replica_cost(rows, family: str, v, column: str | None = None) -> float | None:
     """A replica's CPU seconds at a point so far: the mean ``cpu_seconds`` of the runs of ``family`` at U/Umf ``v``
     that reached their end (of those whose own family, ``column``, is ``column`` alone where given: the runs cut
     short of ``expansion_runs``; without it, of the runs that ended when they mixed alone where the point has some,
@@ -35,7 +35,7 @@ def _untold(v, a: list, b: list, gap: float, pair: str, names: tuple, alike: boo
     """Why the order of two families' values ``a`` and ``b`` at U/Umf ``v`` (their relative difference ``gap``)
     cannot be told: within the replicas' spread (``within_spread``; ``pair`` names the two families), with how
     many replicas of each (``names``) would tell it at the least cost (``costs``: a replica's CPU seconds of each
-    there, ``_replica_cost``; ``how``: the study file's way to add them) or, where ``alike`` (the values' likeness
+    there, ``replica_cost``; ``how``: the study file's way to add them) or, where ``alike`` (the values' likeness
     is told: ``told_alike``), their likeness (``replicas_to_tell``; ``bounded``: ``a``'s mean a lower bound at or
     above ``b``'s, its likeness one-sided), the plan also appended to ``plans`` as data (``plan_record``, of runs
     of ``kind``); or within ``CLOSE`` without replicas. None where it can."""
@@ -78,7 +78,7 @@ def _compare_binarity(rows) -> dict:
         values[f"{v:g}"] = {"ar1": a, "ar4_mp": b}
         untold = _untold(v, by[v]["ar1"], by[v]["ar4_mp"], relative_gap(a, b), "AR-1 against AR-4 MP",
                          names=("ar1", "ar4_mp"),
-                         costs=tuple(_replica_cost(rows, f, v) for f in ("ar1", "ar4_mp")), plans=plans, kind=WHOLE)
+                         costs=tuple(replica_cost(rows, f, v) for f in ("ar1", "ar4_mp")), plans=plans, kind=WHOLE)
         alike = untold and told_alike(by[v]["ar1"], by[v]["ar4_mp"])
         if alike:  # alike within the noise: AR-1's not more binary
             told[v], values[f"{v:g}"]["alike"] = False, alike
@@ -163,7 +163,7 @@ def compare(rows, faster, slower, velocities, claim):
             faster_at[v], gap = order
             untold = _untold(v, entropy[faster], entropy[slower], gap, f"neither mixed: {faster} against {slower}, "
                              f"mixing entropy at their end, {ends[faster][0]:g} s", alike=False, names=pair,
-                             costs=tuple(_replica_cost(rows, f, v) for f in pair), plans=plans)
+                             costs=tuple(replica_cost(rows, f, v) for f in pair), plans=plans)
             if untold:  # never alike (``told_alike``): near its ceiling 10 % of the entropy spans nearly to fully mixed
                 why.append(untold)
                 del faster_at[v]
@@ -175,7 +175,7 @@ def compare(rows, faster, slower, velocities, claim):
             continue
         bounded = mean_a is None and mean_b is not None  # faster's mean a bound at or above slower's (``told_alike``)
         untold = _untold(v, counted[faster][v], counted[slower][v], gap, f"{faster} against {slower}, t95 [s]",
-                         names=(faster, slower), costs=tuple(_replica_cost(rows, f, v) for f in (faster, slower)),
+                         names=(faster, slower), costs=tuple(replica_cost(rows, f, v) for f in (faster, slower)),
                          bounded=bounded, plans=plans)
         # alike within the noise: not faster; where only ``faster``'s mean is a bound (at or above the other's, as
         # here), not below by 10 % is told as well; ``slower``'s bound would bound the wrong side
@@ -336,7 +336,7 @@ def _gap_shrinks(rows, slow, fast, claim, planned=None) -> dict:
                               f"{top:g} Umf, with {standard_errors(k)} ({noise:.3g} s) within "
                               f"{100 * CLOSE:.0f} % of the larger t95 ({margin:.3g} s)")
         elif bound is None:
-            runs = [(f, x, len(counted[f][x]), _replica_cost(rows, f, x)) for x in (v, top) for f in (slow, fast)]
+            runs = [(f, x, len(counted[f][x]), replica_cost(rows, f, x)) for x in (v, top) for f in (slow, fast)]
             series = [(f"{f} at {x:g} Umf", count, cost) for f, x, count, cost in runs]
             spreads_of = [s for x in (v, top) for s in var[x]] if spreads else []
             plan = replicas_to_tell([(count, s, cost) for (_, count, cost), s in zip(series, spreads_of)],
@@ -386,7 +386,7 @@ def _expansion(rows) -> dict:
         untold = _untold(v, a[v], b[v], relative_gap(ma, mb), "AR-4 MP against AR-1",
                          how=f"[[points]] of ar4_mp{EXPANSION} and ar1{EXPANSION}, runs cut short after the window",
                          names=("ar4_mp", "ar1"),
-                         costs=tuple(_replica_cost(rows, f, v, f + EXPANSION) for f in ("ar4_mp", "ar1")),
+                         costs=tuple(replica_cost(rows, f, v, f + EXPANSION) for f in ("ar4_mp", "ar1")),
                          plans=plans, kind=EXPANSION_KIND)
         alike = untold and told_alike(a[v], b[v])
         if alike:  # alike within the noise: AR-4's does not expand more
