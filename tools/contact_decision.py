@@ -11,18 +11,25 @@ and steps, per shape at 2.0 Umf, from the committed archives of the paper's stud
 Each archive's report is rebuilt in a scratch copy first (its table with the entropy columns); ``--quick`` reads
 the archives' committed tables as they are. Without ``--archives``, the committed archives of both studies that
 exist. The last line is one JSON object: per shape, each measure's means at both settings, their runs and order,
-and the verdict; under ``candidates``, per shape each candidate's verdict and the ``choice``."""
+and the verdict; under ``candidates``, per shape each candidate's verdict and the ``choice``. ``--plot FILE.png``
+draws each setting's mixing entropy against time at that velocity (mean and SD band over its ended runs, a run that
+ended mixed held at its last value, as the window entropy counts it), one panel per shape."""
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import shutil
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
+from fvdem.analysis.plots import pyplot, save_figure
 from fvdem.study import report
-from fvdem.study.records import folder_case
-from fvdem.reports.mema2020.readings import contact_candidates, contact_settings
+from fvdem.study.records import RunState, folder_case, state_of
+from fvdem.reports.mema2020.families import T95_ONLY
+from fvdem.reports.mema2020.readings import CANDIDATE, SHAPES, contact_candidates, contact_settings
 
 ROOT = Path(__file__).resolve().parents[1]
 ARCHIVES = tuple(ROOT / "docs" / "data" / name for name in ("mema2020", "contact_paper", "contact_candidates"))
@@ -50,6 +57,49 @@ def with_velocity(archive: Path, row: dict) -> dict:
     return row if case is None else {**row, "gas.u_over_umf": case.gas.u_over_umf}
 
 
+TIMES = np.arange(0.0, 8.0 + 1e-9, 0.05)  # [s] the curves' common grid: the window entropy's 8 s
+
+
+def entropy_curve(run: Path) -> np.ndarray | None:
+    """A run's mixing entropy on ``TIMES`` from its archived timeseries.csv, held at its last value past its end
+    (a run that ended mixed stays mixed); None without one."""
+    path = run / "timeseries.csv"
+    if not path.is_file():
+        return None
+    with path.open() as f:
+        rows = [(float(r["time"]), float(r["mixing_entropy"])) for r in csv.DictReader(f) if r.get("mixing_entropy")]
+    if not rows:
+        return None
+    t, s = np.array(rows).T
+    return np.interp(TIMES, t, s)  # np.interp holds the end values beyond the last sample
+
+
+def plot_curves(archives: list, rows: list, velocity: float, path: Path) -> Path:
+    """Each setting's entropy against time at ``velocity`` per shape (the defaults' replicas, the paper's settings,
+    each candidate): the mean over its ended runs and a band of one SD, the run count in the legend."""
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(SHAPES), figsize=(5.5 * len(SHAPES), 4.0), squeeze=False)
+    where = {r["name"]: archive for archive in archives for r in json.loads((archive / "table.json").read_text())}
+    for ax, (shape, (defaults, paper)) in zip(axes[0], SHAPES.items()):
+        families = {defaults: "defaults", paper: "paper's settings"}
+        families.update({f: f.split(CANDIDATE, 1)[1] for f in sorted({r["family"] for r in rows})
+                         if f.startswith(defaults + CANDIDATE)})
+        for family, label in families.items():
+            runs = [r for r in rows if r["family"] in (family, family + T95_ONLY)
+                    and r.get("gas.u_over_umf") == velocity and state_of(r["status"]) is RunState.ENDED]
+            curves = [c for c in (entropy_curve(where[r["name"]] / "runs" / r["name"]) for r in runs
+                                  if r["name"] in where) if c is not None]
+            if not curves:
+                continue
+            mean, sd = np.mean(curves, axis=0), np.std(curves, axis=0, ddof=1) if len(curves) > 1 else 0.0 * TIMES
+            line, = ax.plot(TIMES, mean, label=f"{label} ({len(curves)} runs)")
+            ax.fill_between(TIMES, mean - sd, mean + sd, color=line.get_color(), alpha=0.2, lw=0)
+        ax.axhline(0.95, color="0.5", lw=0.8, ls=":")
+        ax.set(title=f"{shape} at {velocity:g} Umf", xlabel="time [s]", ylabel="mixing entropy", ylim=(0.0, 1.02))
+        ax.legend(fontsize=8, loc="lower right")
+    return save_figure(fig, path)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--archives", nargs="+", type=Path,
@@ -58,11 +108,15 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="read the archives' committed tables, no rebuild")
     parser.add_argument("--velocity", type=float, default=2.0, help="U/Umf of the comparison (default 2.0)")
     parser.add_argument("--json", action="store_true", help="print only the JSON object")
+    parser.add_argument("--plot", type=Path, metavar="FILE.png",
+                        help="draw each setting's mixing entropy against time (mean, SD band) to this PNG")
     args = parser.parse_args(argv)
     archives = args.archives or [a for a in ARCHIVES if (a / "study.json").exists()]
     missing = [str(a) for a in archives if not (a / "study.json").exists()]
     if missing:
         parser.exit(2, f"--archives: {', '.join(missing)}: not a study archive (no study.json)\n")
+    if args.plot is not None and (args.plot.suffix != ".png" or not args.plot.parent.is_dir()):
+        parser.exit(2, f"--plot {args.plot}: give a .png file in an existing folder\n")
     rows = [r for archive in archives for r in table_rows(archive, rebuild=not args.quick)]
     result = contact_settings(rows, args.velocity)
     result["candidates"] = contact_candidates(rows, args.velocity)
@@ -75,6 +129,8 @@ def main(argv=None) -> int:
                 print(f"  {family}: {c['verdict']}; t95 {c['t95']['candidate']} ({c['t95']['runs']} runs), "
                       f"{c['cost']} CPU s per simulated s")
             print(f"  the defaults move to: {chosen['choice'] or 'not decided yet'}")
+    if args.plot is not None:
+        plot_curves(archives, rows, args.velocity, args.plot)
     print(json.dumps(result))
     return 0
 

@@ -218,6 +218,22 @@ def test_the_contact_decision_tool_refuses_a_folder_that_is_no_archive(tmp_path)
     assert result.returncode == 2 and "not a study archive" in result.stderr and "Traceback" not in result.stderr
 
 
+def test_the_contact_decision_tool_draws_each_settings_entropy_curves(tmp_path):
+    """``--plot``: the committed archives' AR-1 runs at 2.0 Umf, the defaults' replicas and the paper's settings, as
+    mean entropy curves with their SD bands in one PNG; a path that is no .png in an existing folder is refused."""
+    import subprocess
+    import sys
+    tool = [sys.executable, str(ROOT / "tools" / "contact_decision.py"), "--quick", "--json", "--archives",
+            str(ROOT / "docs" / "data" / "mema2020"), str(ROOT / "docs" / "data" / "contact_paper")]
+    png = tmp_path / "contact.png"
+    result = subprocess.run(tool + ["--plot", str(png)], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    bad = subprocess.run(tool + ["--plot", str(tmp_path / "missing" / "x.png")], capture_output=True, text=True,
+                         timeout=300)
+    assert bad.returncode == 2 and "--plot" in bad.stderr and "Traceback" not in bad.stderr
+
+
 def test_the_contact_decision_tool_reads_a_familys_velocity_from_its_archived_case(tmp_path):
     """studies/contact_paper.toml runs its families at their case's own U/Umf, which a study's table (its swept
     keys only) does not list: the tool takes it from each archived run's case.toml, so the rule finds the runs
