@@ -20,9 +20,9 @@ def test_how_many_replicas_would_tell_comes_with_their_core_hours():
     """``replicas_to_tell``: the replicas in all of each series that bring the standard error times Student's t
     (at the plan's degrees of freedom) below what tells the difference, at the least cost (equal spreads and
     costs: equal counts, ``sqrt(sum var / n)``; a series 4 times the cost gets half the replicas); ``to_tell``:
-    them, with the core-hours of those to add at a replica's CPU seconds there so far (``_replica_cost``: the mean
+    them, with the core-hours of those to add at a replica's CPU seconds there so far (``replica_cost``: the mean
     of the runs at their end, of one column alone where asked)."""
-    from fvdem.reports.mema2020.rules import _replica_cost
+    from fvdem.reports.mema2020.rules import replica_cost
     from fvdem.reports.mema2020.spread import core_hours, satterthwaite, to_tell
 
     def margin_squared(n, m):  # t^2 (1 / n + 1 / m) at the Welch-Satterthwaite degrees of freedom, unit variances
@@ -44,12 +44,12 @@ def test_how_many_replicas_would_tell_comes_with_their_core_hours():
         return {"family": family, "gas.u_over_umf": v, "status": status, "cpu_seconds": cpu, **more}
     rows = [run("ar1", 1.6, 1000.0), run("ar1", 1.6, 3000.0), run("ar1", 1.6, 50.0, status="stopped"),
             run("ar1", 2.0, 9000.0), run("ar4_mp", 1.6, 7200.0, column="ar4_mp_expansion"), run("ar4_mp", 1.6, 72000.0)]
-    assert _replica_cost(rows, "ar1", 1.6) == 2000.0  # the run on its way left out
-    assert _replica_cost(rows, "ar4_mp", 1.6, "ar4_mp_expansion") == 7200.0  # the runs cut short alone
-    assert _replica_cost(rows, "ar4_mp", 1.6) == (7200.0 + 72000.0) / 2 and _replica_cost(rows, "ar4_sp", 1.6) is None
+    assert replica_cost(rows, "ar1", 1.6) == 2000.0  # the run on its way left out
+    assert replica_cost(rows, "ar4_mp", 1.6, "ar4_mp_expansion") == 7200.0  # the runs cut short alone
+    assert replica_cost(rows, "ar4_mp", 1.6) == (7200.0 + 72000.0) / 2 and replica_cost(rows, "ar4_sp", 1.6) is None
     # where runs ended when they mixed ("<family>_t95", ``cut_at_t95``), the replicas to add are of those
     rows.append(run("ar1", 2.0, 6000.0, column="ar1_t95", cut_at_t95=True))
-    assert _replica_cost(rows, "ar1", 2.0) == 6000.0 and _replica_cost(rows, "ar1", 1.6) == 2000.0
+    assert replica_cost(rows, "ar1", 2.0) == 6000.0 and replica_cost(rows, "ar1", 1.6) == 2000.0
     # 14 of each: AR-1 has 4 (10 more at 2000 s), AR-4 MP 3 (11 more at 7200 s): 27.6 core-hours; none where a
     # cost is unknown
     assert core_hours([14, 14], [4, 3], [2000.0, 7200.0]) == pytest.approx(27.6, abs=0.05)
