@@ -74,12 +74,14 @@ def entropy_curve(run: Path) -> np.ndarray | None:
     return np.interp(TIMES, t, s)  # np.interp holds the end values beyond the last sample
 
 
-def plot_curves(archives: list, rows: list, velocity: float, path: Path) -> Path:
+def plot_curves(tables: dict, velocity: float, path: Path) -> Path:
     """Each setting's entropy against time at ``velocity`` per shape (the defaults' replicas, the paper's settings,
-    each candidate): the mean over its ended runs and a band of one SD, the run count in the legend."""
+    each candidate): the mean over its ended runs and a band of one SD, the run count in the legend; ``tables``:
+    each archive's table rows (``table_rows``)."""
     plt = pyplot()
     fig, axes = plt.subplots(1, len(SHAPES), figsize=(5.5 * len(SHAPES), 4.0), squeeze=False)
-    where = {r["name"]: archive for archive in archives for r in json.loads((archive / "table.json").read_text())}
+    rows = [r for table in tables.values() for r in table]
+    where = {r["name"]: archive for archive, table in tables.items() for r in table}
     for ax, (shape, (defaults, paper)) in zip(axes[0], SHAPES.items()):
         families = {defaults: "defaults", paper: "paper's settings"}
         families.update({f: f.split(CANDIDATE, 1)[1] for f in sorted({r["family"] for r in rows})
@@ -117,7 +119,8 @@ def main(argv=None) -> int:
         parser.exit(2, f"--archives: {', '.join(missing)}: not a study archive (no study.json)\n")
     if args.plot is not None and (args.plot.suffix != ".png" or not args.plot.parent.is_dir()):
         parser.exit(2, f"--plot {args.plot}: give a .png file in an existing folder\n")
-    rows = [r for archive in archives for r in table_rows(archive, rebuild=not args.quick)]
+    tables = {archive: table_rows(archive, rebuild=not args.quick) for archive in archives}
+    rows = [r for table in tables.values() for r in table]
     result = contact_settings(rows, args.velocity)
     result["candidates"] = contact_candidates(rows, args.velocity)
     if not args.json:
@@ -130,7 +133,7 @@ def main(argv=None) -> int:
                       f"{c['cost']} CPU s per simulated s")
             print(f"  the defaults move to: {chosen['choice'] or 'not decided yet'}")
     if args.plot is not None:
-        plot_curves(archives, rows, args.velocity, args.plot)
+        plot_curves(tables, args.velocity, args.plot)
     print(json.dumps(result))
     return 0
 

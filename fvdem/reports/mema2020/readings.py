@@ -80,11 +80,11 @@ def _plan(rows, groups: list, difference: float, margin: float | None, plans: li
     their coefficients in the difference (a group's variance enters times its weight squared). Returns the
     words ("about 3 of ar1 at 1.7 Umf and ... in all would tell ...")."""
     weights = weights or [1.0] * len(groups)
-    known = [sample_variance(x) for _, _, x in groups if len(x) > 1 and sample_variance(x) > 0]
-    if not known:
+    variances = _borrowed_variances([x for _, _, x in groups])
+    if variances is None:
         return "more replicas would tell"
-    series = [(len(x), w * w * (sample_variance(x) if len(x) > 1 and sample_variance(x) > 0 else max(known)),
-               replica_cost(rows, family, v)) for (family, v, x), w in zip(groups, weights)]
+    series = [(len(x), w * w * var, replica_cost(rows, family, v))
+              for (family, v, x), w, var in zip(groups, weights, variances)]
     plan = replicas_to_tell(series, difference, margin)
     named = [(f"{family} at {v:g} Umf", len(x), cost) for (family, v, x), (_, _, cost) in zip(groups, series)]
     if plan:
@@ -221,16 +221,22 @@ def largest_change_first(rows, families: tuple, paper: str) -> dict:
     return _verdict(claim, told, untold, values, rule, paper, plans)
 
 
+def _borrowed_variances(groups: list) -> list | None:
+    """Each group's sample variance, a group of one run (or of zero spread) taking the largest of the others' (the
+    same chaos); None where no group has one."""
+    variances = [sample_variance(g) if len(g) > 1 else None for g in groups]
+    known = [v for v in variances if v]
+    return [v if v else max(known) for v in variances] if known else None
+
+
 def _rise_error(groups: list, weights=None) -> tuple[float | None, float | None]:
     """The standard error of a weighted sum of independent group means (``weights``: each group's coefficient,
     1 by default; its variance enters times the weight squared; a group of one run borrows the largest sample
     variance of the others) and its Welch-Satterthwaite degrees of freedom."""
     weights = weights or [1.0] * len(groups)
-    variances = [sample_variance(g) if len(g) > 1 else None for g in groups]
-    known = [v for v in variances if v]
-    if not known:
+    variances = _borrowed_variances(groups)
+    if variances is None:
         return None, None
-    variances = [v if v else max(known) for v in variances]
     terms = [w * w * v / len(g) for v, g, w in zip(variances, groups, weights)]
     dfs = [max(len(g) - 1, 1) for g in groups]
     return math.sqrt(sum(terms)), satterthwaite(terms, dfs)
@@ -445,8 +451,7 @@ def contact_candidates(rows: list, velocity: float = 2.0) -> dict:
             entry["choice"], entry["why"] = None, "an agreeing candidate's or the paper's cost is not known"
         elif any(cost < paper_cost for cost in agreeing.values()):
             entry["choice"] = min((f for f, cost in agreeing.items() if cost < paper_cost), key=agreeing.get)
-        elif families and all(c["verdict"] == "differs" or c["verdict"] == "agrees"
-                              for c in entry["candidates"].values()):
+        elif families and all(c["verdict"] in ("differs", "agrees") for c in entry["candidates"].values()):
             entry["choice"] = paper  # every candidate differs, or agrees at no saving
         else:
             entry["choice"] = None
