@@ -43,6 +43,12 @@ def _order(a: list, b: list) -> str | None:
     return "alike" if told_alike(a, b) else None
 
 
+def _order_said(a: list, b: list) -> str:
+    """``_order`` of two families' values as the contact rules report it: "untold" within the spread, "no runs"
+    where a side has none."""
+    return (_order(a, b) or "untold") if a and b else "no runs"
+
+
 def _window(rows, family) -> dict:
     """``{U/Umf: [window mean entropy of each run that holds one]}`` of a family."""
     return {v: [x for x in values if x is not None]
@@ -352,7 +358,7 @@ def contact_settings(rows: list, velocity: float = 2.0) -> dict:
             a = [x for x in by_velocity(rows, paper, key).get(velocity, []) if x is not None]
             b = [x for x in by_velocity(rows, defaults, key).get(velocity, []) if x is not None]
             entry[key] = {"paper": _mean(a) if a else None, "defaults": _mean(b) if b else None,
-                          "runs": [len(a), len(b)], "order": (_order(a, b) or "untold") if a and b else "no runs"}
+                          "runs": [len(a), len(b)], "order": _order_said(a, b)}
         unmixed = [x for x in by_velocity(rows, paper, "t95").get(velocity, []) if x is None]
         judged = [entry["t95"]["order"], entry["mixing_entropy_window"]["order"]]
         if unmixed:
@@ -424,9 +430,7 @@ def contact_candidates(rows: list, velocity: float = 2.0) -> dict:
                     x = [v for v in by_velocity(rows, family, key).get(velocity, []) if v is not None]
                 p, d = ([v for v in by_velocity(rows, f, key).get(velocity, []) if v is not None]
                         for f in (paper, defaults))
-                to_paper = (_order(x, p) or "untold") if x and p else "no runs"
-                to_defaults = (_order(x, d) or "untold") if x and d else "no runs"
-                paper_way = (_order(p, d) or "untold") if p and d else "no runs"
+                to_paper, to_defaults, paper_way = _order_said(x, p), _order_said(x, d), _order_said(p, d)
                 if key == "t95" and unmixed and to_paper != "higher":  # a bound tells only "above"
                     to_paper = to_defaults = "untold (lower bound)"
                 c[key] = {"candidate": _mean(x) if x else None, "runs": len(x), "against_paper": to_paper,
