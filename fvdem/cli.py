@@ -193,8 +193,9 @@ def cmd_study(args) -> int:
         code = _changed_folders(study, args.out, args.supersede, log)
         if code:
             return code
-        if args.restore:
-            code = _restore(study, args.restore, log)
+        sources = ([(args.restore, False)] if args.restore else []) + [(a, True) for a in args.adopt or ()]
+        for source, adopt in sources:
+            code = _restore(study, source, log, adopt)
             if code:
                 return code
         durations = "/".join(f"{d:g}" for d in sorted({r.duration for r in study.runs})) or f"{study.duration:g}"
@@ -244,23 +245,25 @@ def _changed_folders(study, out, supersede: bool, log) -> int:
     return 0
 
 
-def _restore(study, source, log) -> int:
-    """``fvdem study --restore``: the archive's finished runs into the study's run folders, one line each."""
+def _restore(study, source, log, adopt: bool = False) -> int:
+    """``fvdem study --restore`` (``--adopt``): the archive's finished runs into the study's run folders, one line
+    each."""
     from .study import restore
+    option = "--adopt" if adopt else "--restore"
     if not Path(source, "study.json").exists():
-        return _fail(f"--restore {source}: not an archive of a study (no study.json; fvdem study DIR --archive "
+        return _fail(f"{option} {source}: not an archive of a study (no study.json; fvdem study DIR --archive "
                      f"{source} writes one)")
     try:
-        outcomes = restore(study, source)
+        outcomes = restore(study, source, adopt)
     except ValueError as exc:
         return _fail(str(exc))
     counts = {}
     for name, outcome in outcomes:
         counts[outcome.split(":")[0]] = counts.get(outcome.split(":")[0], 0) + 1
-        if outcome not in ("restored", "exists"):
-            log(f"restore: {name}: {outcome}" + (" (starts again: an archive has no checkpoint)"
-                                                 if outcome == "in progress" else ""))
-    log(f"restore from {source}: " + (", ".join(f"{n} {k}" for k, n in counts.items()) or "no archived runs"))
+        if outcome not in ("restored", "adopted", "exists"):
+            log(f"{option[2:]}: {name}: {outcome}" + (" (starts again: an archive has no checkpoint)"
+                                                      if outcome == "in progress" and not adopt else ""))
+    log(f"{option[2:]} from {source}: " + (", ".join(f"{n} {k}" for k, n in counts.items()) or "no archived runs"))
     return 0
 
 
@@ -490,6 +493,10 @@ def make_parser() -> argparse.ArgumentParser:
                        help="first copy into --out the runs an archive of this study (--archive) holds at their "
                             "end, so that they are skipped (a study folder lost with its machine); never over a "
                             "run folder that exists; runs the archive holds in progress start again")
+    study.add_argument("--adopt", nargs="+", metavar="ARCHIVE",
+                       help="first copy into --out the runs another study's archive holds at their end where this "
+                            "study has a run of the same name, case and bed, so that they count here as they are (a "
+                            "later stage reusing an earlier one's runs); never over a run folder that exists")
     study.add_argument("--supersede", action="store_true",
                        help="move bed and run folders that were started with other physics than the study file now "
                             "sets (a changed setting) to --out's superseded/ and run them again; without it such "

@@ -367,13 +367,17 @@ def _refresh_duration(entry: dict, current: dict) -> None:
         entry["duration"] = current["duration"]
 
 
-def restore(study, source) -> list:
+def restore(study, source, adopt: bool = False) -> list:
     """``archive``'s way back, for a study folder lost with its machine: each run that the archive ``source``
     holds at its end under the study's current case is copied into its run folder (its compact results:
     summary, time series, case, log, the report's extra files), so that the study skips it and settles no bed
     for it. Never over a run folder that exists. An archived run still in progress starts again (an archive
     has no checkpoint); the archive keeps its results until the new run passes them. Returns one
-    ``(run, outcome)`` per archived run: "restored", "exists", "in progress" or "case differs: <keys>"."""
+    ``(run, outcome)`` per archived run: "restored", "exists", "in progress" or "case differs: <keys>".
+
+    ``adopt``: ``source`` is the archive of another study (an earlier stage whose runs a later one counts as they
+    are): a run it holds at its end is copied where this study has a run of the same name, case and bed
+    ("adopted"), on the same terms; a run in progress there is not copied (this study runs its own)."""
     import shutil
 
     from ..case import load_case
@@ -381,8 +385,9 @@ def restore(study, source) -> list:
     from ..provenance import describe, provenance
     source = Path(source)
     index = json.loads((source / "study.json").read_text())
-    if index.get("study") != study.name:
-        raise ValueError(f"--restore {source}: an archive of study {index.get('study')!r}, not {study.name!r}")
+    if index.get("study") != study.name and not adopt:
+        raise ValueError(f"--restore {source}: an archive of study {index.get('study')!r}, not {study.name!r} "
+                         "(--adopt counts another study's ended runs)")
     outcomes = []
     for run in study.runs:
         held = source / "runs" / run.name
@@ -404,10 +409,11 @@ def restore(study, source) -> list:
         else:
             folder.parent.mkdir(parents=True, exist_ok=True)
             shutil.copytree(held, folder, dirs_exist_ok=True)
+            how = f"adopted from the archive of study {index.get('study')!r}" if adopt else "restored from the archive"
             with open(folder / "run.log", "a") as log:
-                log.write(f"restored from the archive {source.resolve()} (compact results: no checkpoint, "
-                          f"state or snapshots; the run had ended) by {describe(provenance())}\n")
-            outcomes.append((run.name, "restored"))
+                log.write(f"{how} {source.resolve()} (compact results: no checkpoint, state or snapshots; the run "
+                          f"had ended) by {describe(provenance())}\n")
+            outcomes.append((run.name, "adopted" if adopt else "restored"))
     return outcomes
 
 

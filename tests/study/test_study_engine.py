@@ -718,7 +718,8 @@ def test_a_study_lost_with_its_machine_continues_from_its_archive(tmp_path, caps
     NEW and skipped, with no bed settled for them; a run the archive holds in progress starts again (an
     archive has no checkpoint) from a bed settled again, and ends bit-for-bit as it did on the lost machine;
     a run folder that exists is never replaced; a run whose case changed since is not restored; an archive of
-    another study, or a folder that is no archive, is refused (exit 2) before anything runs."""
+    another study, or a folder that is no archive, is refused (exit 2) before anything runs; ``--adopt`` takes
+    another study's ended runs of the same name, case and bed."""
     from fvdem.cli import main
     from fvdem.study import archive, restore, run_study
     path = tmp_path / "smoke.toml"
@@ -776,6 +777,16 @@ def test_a_study_lost_with_its_machine_continues_from_its_archive(tmp_path, caps
         code, _, err = study(tmp_path / "refused", "--restore", str(source))
         assert code == 2 and said in err and "Traceback" not in err
         assert not (tmp_path / "refused" / "runs").exists()
+    # adopted: another study's archive (an earlier stage) gives its ended runs of the same name, case and bed;
+    # its run in progress is left for this study to run; a changed case is not adopted
+    adopted = tmp_path / "adopted"
+    assert restore(load_study(path, adopted), dest, adopt=True) == [(first, "adopted"), (second, "in progress")]
+    assert "adopted from the archive of study 'another'" in (adopted / "runs" / first / "run.log").read_text()
+    assert not (adopted / "runs" / second).exists()
+    assert dict(restore(load_study(changed, tmp_path / "changed2"), dest, adopt=True))[first].startswith(
+        "case differs: contact.friction: ")
+    code, _, err = study(tmp_path / "refused", "--adopt", str(tmp_path / "lost" / "runs"))
+    assert code == 2 and "--adopt" in err and "no study.json" in err and "Traceback" not in err
 
 
 def test_the_eta_counts_only_what_this_invocation_simulated():
