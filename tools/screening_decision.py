@@ -8,8 +8,10 @@ by the rule ``fvdem.reports.mema2020.decisions.screening_decision`` (docs/bed-dy
 Each archive's screening report is rebuilt in a scratch copy first (``fvdem study COPY --report``); ``--quick``
 reads the archives' committed ``screening.json`` as it is. Without ``--archives``, the committed archives of both
 screenings that exist. Prints, per shape, each factor's main effect on the primary response with its 95 % interval
-and its decision ("change", "keep", "cause", "add replicas", "fold-over first"); the last line is one JSON object:
-per shape the decision record (``factors``, ``changes``: the high levels' settings the study moves to, ``decided``)."""
+and its decision ("change", "keep", "cause", "add replicas", "fold-over first", "waits for the early signs"), and the
+told two-factor chains; until every planned run holds the responses the reading is provisional and changes nothing.
+The last line is one JSON object: per shape the decision record (``factors``, ``chains``, ``changes``: the high
+levels' settings the study moves to, ``decided``)."""
 from __future__ import annotations
 
 import argparse
@@ -71,11 +73,13 @@ def main(argv=None) -> int:
             continue
         print(f"{decision['shape']} ({archive.name}), on {decision['primary']}:")
         if "waiting" in decision:
-            print(f"  not yet: {decision['waiting']}")
+            print(f"  not yet: {decision['waiting']} (the reading below is provisional)")
         for factor, entry in decision["factors"].items():
             why = entry.get("why") or ", ".join(entry.get("chains", [])) or entry.get("paper_fixes") or ""
             print(f"  {factor:8s} {entry['estimate']:+.3f} {_interval(entry):18s} {entry['decision']}"
                   + (f" ({why})" if why and entry["decision"] != "keep" else ""))
+        for chain in decision["chains"]:
+            print(f"  told chain {chain['chain']}: {chain['estimate']:+.3f} {_interval(chain)}")
         print(f"  changes: {decision['changes'] or 'none'}{'' if decision['decided'] else ' (not decided yet)'}")
     print(json.dumps({"screenings": out}))
     return 0

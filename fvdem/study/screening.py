@@ -4,7 +4,8 @@ interactions with their confidence intervals (``fvdem.study.design.analyse``), a
 ``screening.md`` and a Pareto chart of the standardized effects per response (``pareto_<response>.png``).
 
 A response is a column of the study's table (its report's, e.g. ``bed_expansion``) or a time-series column at a
-simulated time (``kinetic_energy@3.0``: interpolated; a run that has not reached the time holds none yet). A
+simulated time (``kinetic_energy@3.0``: interpolated; a run that has not reached the time holds none yet, one that
+ended before it by its case's stop condition, ``time.stop_after_mixed``, holds its last value there). A
 response listed as ``censored`` (a time a run may end before reaching: it holds none then) takes the run's
 simulated end where the run ended without it, and says so: an effect with censored runs is a bound (the censored
 runs would have taken longer). Effects are computed once every design point holds the response
@@ -33,7 +34,7 @@ def response_value(response: str, row: dict, series, censored: bool):
         if series is None or column not in series or not len(series["time"]):
             return None, False
         times = np.asarray(series["time"], float)
-        if times[-1] < at - 1e-9:
+        if times[-1] < at - 1e-9 and not _ended_early(row):
             return None, False
         return float(np.interp(at, times, np.asarray(series[column], float))), False
     value = row.get(response)
@@ -42,6 +43,15 @@ def response_value(response: str, row: dict, series, censored: bool):
     if censored and state_of(row.get("status")) is RunState.ENDED and row.get("simulated_seconds"):
         return float(row["simulated_seconds"]), True
     return None, False
+
+
+def _ended_early(row: dict) -> bool:
+    """Whether a run ended before its duration by its case's own stop condition (``time.stop_after_mixed``: mixed,
+    and held that long): its state is final, and a time-series response past its end takes its last value (a mixed
+    bed's entropy stays at its ceiling). A run stopped by the study (checkpointed) has not ended."""
+    end, duration = row.get("simulated_seconds"), row.get("duration")
+    return (state_of(row.get("status")) is RunState.ENDED and end is not None and duration is not None
+            and end < duration - 1e-9)
 
 
 def screening(out, design: dict, rows: list, series: dict) -> list:
@@ -115,7 +125,7 @@ def _to_tell(effect, mean: float, replicas: float) -> dict:
     if effect.low is None or effect.decided():
         return {"undecided": False, "replicas_to_tell": None}
     size = MATTERS * abs(mean)
-    undecided = effect.low < 0 < effect.high and (effect.high > size or effect.low < -size)
+    undecided = effect.low <= 0 <= effect.high and (effect.high >= size or effect.low <= -size)
     half = (effect.high - effect.low) / 2
     target = abs(effect.estimate) if abs(effect.estimate) > size / 2 else size - abs(effect.estimate)
     need = None if target <= 0 or half <= 0 else math.ceil(replicas * (half / target) ** 2)

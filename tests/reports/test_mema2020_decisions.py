@@ -21,14 +21,17 @@ AR1 = {"rolling": ("A", {"contact.rolling_friction": 0.0}), "wall": ("B", {"cont
 AR4 = {**AR1, "lift": ("G", {"coupling.lift": "none"}), "torque": ("H", {"coupling.torque": "none"})}
 
 
-def _screen(tmp_path, name, factors, generators, responses, effects, noise, seed=0, replicas=2, drop=0):
+def _screen(tmp_path, name, factors, generators, responses, effects, noise, seed=0, replicas=2, drop=0,
+            planned=None, unread=None):
     """Run the generic screening report on a synthetic design: each response ``base + sum(effect / 2 * coded)``
-    plus N(0, noise) (``effects``: response -> (base, {term: effect})), entropy columns as time series."""
+    plus N(0, noise) (``effects``: response -> (base, {term: effect})), entropy columns as time series; ``drop``:
+    leave out the first point's runs; ``planned``: the design's replicas where fewer ran; ``unread``: a response
+    the first point's runs do not hold yet."""
     letters = {f: letter for f, (letter, _) in factors.items()}
     built = two_level(len(factors), generators)
     design = {"name": name, "label": built.label(), "letters": letters, "generators": generators,
               "defining_relation": built.defining_relation(), "resolution": built.resolution,
-              "aliases": {x: built.aliases(x) for x in built.letters}, "replicas": replicas, "centre_points": 0,
+              "aliases": {x: built.aliases(x) for x in built.letters}, "replicas": planned or replicas, "centre_points": 0,
               "responses": responses, "censored": [], "confidence": 0.95,
               "factors": {f: {"letter": letter, "low": {}, "high": high} for f, (letter, high) in factors.items()}}
     rng = np.random.default_rng(seed)
@@ -43,6 +46,8 @@ def _screen(tmp_path, name, factors, generators, responses, effects, noise, seed
             value = base + rng.normal(0.0, noise)
             for term, effect in terms.items():
                 value += effect / 2 * np.prod([coded[built.letters.index(x)] for x in term])
+            if response == unread and i == 0:
+                continue
             if "@" in response:
                 column, at = response.split("@")
                 curves.setdefault(column, {})[float(at)] = value
@@ -99,12 +104,12 @@ def test_a_screening_still_waiting_for_design_points_decides_nothing(tmp_path):
     assert "waiting" in d and d["factors"] == {} and not d["decided"]
 
 
-def _ar4(tmp_path, alignment_terms):
+def _ar4(tmp_path, alignment_terms, corner_terms=None, entropy_terms=None, unread=None):
     responses = ["mixing_entropy@6.0", "rod_alignment_inside", "corner_gas_share"]
-    effects = {"mixing_entropy@6.0": (0.5, {"C": 0.15, "E": 0.15}),
-               "rod_alignment_inside": (0.4, alignment_terms), "corner_gas_share": (0.3, {})}
+    effects = {"mixing_entropy@6.0": (0.5, entropy_terms or {"C": 0.15, "E": 0.15}),
+               "rod_alignment_inside": (0.4, alignment_terms), "corner_gas_share": (0.3, corner_terms or {})}
     return _screen(tmp_path, "ar4_mp", AR4, ["E = BCD", "F = ACD", "G = ABC", "H = ABD"], responses, effects,
-                   0.005)
+                   0.005, unread=unread)
 
 
 def test_ar4_an_early_sign_told_against_the_paper_withholds_the_change(tmp_path):
@@ -117,10 +122,46 @@ def test_ar4_an_early_sign_told_against_the_paper_withholds_the_change(tmp_path)
     assert d["changes"] == {"packing": {"bed": "ar1_dense"}}
 
 
-def test_ar4_lift_and_torque_are_the_papers_closures(tmp_path):
-    d = screening_decision(_ar4(tmp_path, {}))
+def test_ar4_more_gas_in_the_corners_withholds_the_change_too(tmp_path):
+    d = screening_decision(_ar4(tmp_path, {}, corner_terms={"C": 0.06}))
+    assert d["factors"]["packing"]["decision"] == "keep"
+    assert d["factors"]["packing"]["signs_against"] == ["corner_gas_share"]
+    assert d["factors"]["voidage"]["decision"] == "change" and d["changes"] == {"voidage": AR4["voidage"][1]}
+    # less gas in the corners is the paper's way: no veto
+    d = screening_decision(_ar4(tmp_path, {}, corner_terms={"C": -0.06}))
+    assert d["factors"]["packing"]["decision"] == "change"
+
+
+def test_ar4_lift_and_torque_are_the_papers_closures_and_a_cause_where_they_matter(tmp_path):
+    d = screening_decision(_ar4(tmp_path, {}, entropy_terms={"E": 0.15, "G": 0.12, "H": -0.12}))
     assert {"lift", "torque", "rolling"} <= set(PAPER_FIXES)
-    assert d["factors"]["voidage"]["decision"] == "change" and d["factors"]["lift"]["decision"] == "keep"
+    assert d["factors"]["lift"]["decision"] == "cause"  # no lift mixes the bed faster: a cause, not adopted
+    assert d["factors"]["torque"]["decision"] == "keep"  # no torque mixes slower: no cause of the gap
+    assert d["factors"]["voidage"]["decision"] == "change" and set(d["changes"]) == {"voidage"}
+
+
+def test_ar4_an_early_sign_not_read_yet_holds_every_change(tmp_path):
+    d = screening_decision(_ar4(tmp_path, {}, unread="corner_gas_share"))
+    assert d["factors"]["voidage"]["decision"] == "waits for the early signs"
+    assert "corner_gas_share" in d["waiting"] and not d["decided"] and d["changes"] == {}
+
+
+def test_a_reading_before_every_replica_has_run_is_provisional(tmp_path):
+    """Every design point once (16 of 32 runs): the effects are read, nothing is decided or changed."""
+    d = screening_decision(_ar1(tmp_path, {"D": 0.12}, replicas=1, planned=2))
+    assert d["factors"]["start"]["decision"] == "change"  # the provisional reading
+    assert d["waiting"] == "16 of 32 runs hold mixing_entropy@3.0" and not d["decided"] and d["changes"] == {}
+
+
+def test_an_effect_without_an_interval_waits_and_a_cause_needs_no_fold_over(tmp_path):
+    record = _ar1(tmp_path, {"A": 0.15, "AD": 0.08})
+    d = screening_decision(record)
+    assert d["factors"]["rolling"]["decision"] == "cause"  # never adopted: the chain AD + EF holds nothing
+    assert [c["chain"] for c in d["chains"]] == ["AD + EF"] and d["decided"]
+    wall = next(e for e in record["results"]["mixing_entropy@3.0"]["effects"] if e["term"] == "B")
+    wall["low"] = wall["high"] = None
+    d = screening_decision(record)
+    assert d["factors"]["wall"]["decision"] == "add replicas" and not d["decided"]
 
 
 def test_a_design_that_is_not_a_screening_of_the_paper_is_refused(tmp_path):
@@ -134,18 +175,20 @@ def test_a_design_that_is_not_a_screening_of_the_paper_is_refused(tmp_path):
         screening_decision(record)
 
 
-@pytest.mark.parametrize("low, high", [
-    ([0.60, 0.62, 0.58], [0.75, 0.78, 0.73]),   # clearly up
-    ([0.60, 0.66, 0.55], [0.64, 0.70, 0.61]),   # up within the spread
-    ([0.60, 0.62, 0.58], [0.50, 0.47, 0.52]),   # clearly down
-    ([0.60, 0.61, 0.59, 0.60], [0.66, 0.64, 0.65]),
+@pytest.mark.parametrize("low, high, screened, verdict", [
+    ([0.60, 0.62, 0.58], [0.75, 0.78, 0.73], 0.12, "confirms"),  # clearly up, as screened
+    ([0.60, 0.62, 0.58], [0.75, 0.78, 0.73], -0.12, "does not confirm"),  # up, screened down
+    ([0.60, 0.62, 0.58], [0.50, 0.47, 0.52], -0.12, "confirms"),  # down, as screened
+    ([0.60, 0.62, 0.58], [0.50, 0.47, 0.52], 0.12, "does not confirm"),
+    ([0.60, 0.66, 0.55], [0.64, 0.70, 0.61], 0.12, "add runs"),  # the interval reaches 0 and 10 % of the mean
+    ([0.600, 0.602, 0.598, 0.600], [0.605, 0.601, 0.603], 0.12, "does not confirm"),  # told smaller than 10 %
 ])
-def test_the_confirmation_at_new_contact_settings_is_welchs_test(low, high):
-    screened = {"estimate": 0.12}  # the screening told this factor up
-    c = confirmation(low, high, screened)
+def test_the_confirmation_at_new_contact_settings_is_welchs_test(low, high, screened, verdict):
+    c = confirmation(low, high, {"estimate": screened})
     welch = ttest_ind(high, low, equal_var=False)
-    up = np.mean(high) > np.mean(low)
-    assert c["verdict"] == ("confirms" if welch.pvalue < 0.05 and up else "does not confirm")
+    assert c["verdict"] == verdict
     assert c["estimate"] == pytest.approx(np.mean(high) - np.mean(low))
     assert (c["interval"][0] > 0 or c["interval"][1] < 0) == (welch.pvalue < 0.05)
-    assert confirmation(low[:1], high, screened)["verdict"] == "open"
+    if verdict == "add runs":
+        assert max(abs(x) for x in c["interval"]) >= 0.1 * np.mean(low + high)
+    assert confirmation(low[:1], high, {"estimate": screened})["verdict"] == "open"

@@ -94,6 +94,7 @@ def test_an_unreplicated_saturated_fraction_takes_lenths_pse_and_a_full_factoria
 
 
 def test_a_response_reads_a_column_or_a_series_at_a_time_and_a_censored_one_takes_the_end():
+    """A run that ended early by its stop condition holds its last value at later times."""
     series = {"time": np.array([0.0, 1.0, 2.0]), "mixing_entropy": np.array([0.1, 0.5, 0.7])}
     row = {"status": "finished", "simulated_seconds": 8.0, "t95": None, "bed_height": 0.3}
     assert response_value("mixing_entropy@1.5", row, series, False) == (pytest.approx(0.6), False)
@@ -101,6 +102,11 @@ def test_a_response_reads_a_column_or_a_series_at_a_time_and_a_censored_one_take
     assert response_value("bed_height", row, series, False) == (0.3, False)
     assert response_value("t95", row, series, True) == (8.0, True)  # ended unmixed: censored at its end
     assert response_value("t95", {**row, "status": "running"}, series, True) == (None, False)
+    # ended at 2 s of its 7 by its case's stop condition (mixed): its last value holds later; stopped by the
+    # study at 2 s (a checkpoint), it holds none
+    early = {**row, "simulated_seconds": 2.0, "duration": 7.0, "t95": 1.0}
+    assert response_value("mixing_entropy@3.0", early, series, False) == (pytest.approx(0.7), False)
+    assert response_value("mixing_entropy@3.0", {**early, "status": "stopped"}, series, False) == (None, False)
 
 
 FALL = '''name = "fall"

@@ -9,7 +9,8 @@ paper does not fix change for the re-run of the paper's study (stage 3), read fr
 3. a factor changes only where (a) it matters, (b) its change moves the bed toward the paper's behaviour (AR-1: more
    mixed at 3 s; AR-4 MP: more mixed at 6 s, rods less flat, less gas in the corners) and (c) the paper does not
    fix the setting (rolling friction, Table 5, and the closures: lift and torque); a factor the paper fixes that
-   matters is reported as a cause, never adopted;
+   matters is reported as a cause, never adopted (as coded: one that matters toward the paper's behaviour; one
+   that matters away from it is no cause of the gap and is kept);
 4. a told two-factor chain that holds a factor to be changed is resolved (a fold-over of the design) before the
    change.
 
@@ -19,7 +20,11 @@ flatter, more gas in the corners) withholds the change, and an untold one does n
 
 The stage-3 confirmation of a factor at new contact settings (docs/bed-dynamics.md, "Stage 3", rule 1) is
 ``confirmation``: 3 runs at its high level against 3 at its low, rule 2 on the primary response (the 95 % interval
-of the difference of the means, Welch's t), in the screening's direction.
+of the difference of the means, Welch's t, in the screening's direction; runs added where it reaches both zero and
+10 % of the mean).
+
+Effects are read on every replica the design plans: until every planned run holds the primary response (and, for
+AR-4 MP, its early signs) the reading is provisional and changes nothing.
 """
 from __future__ import annotations
 
@@ -63,15 +68,28 @@ def _told_way(effect: dict | None) -> int:
     return 1 if effect["estimate"] > 0 else -1
 
 
+def _complete(record: dict, response: str) -> str | None:
+    """None where every planned run of the design (its points times its replicas) holds ``response``; else what
+    waits (effects are read on every replica: one replica of a saturated design has no error term of its own)."""
+    result = record["results"].get(response, {})
+    if "effects" not in result:
+        return f"{response}: {result.get('waiting', 'not in the record')}"
+    planned = result["points"] * record["design"]["replicas"]
+    return None if result["runs"] >= planned else f"{result['runs']} of {planned} runs hold {response}"
+
+
 def screening_decision(record: dict) -> dict:
     """Rules 1-4 on a screening's record: per factor its main effect on the primary response with the interval,
     ``matters`` (True, False, or None: within its interval of mattering, replicas to add first, or no interval),
     ``toward_paper`` (rule 3 b), ``paper_fixes`` (rule 3 c: where, or None) and ``decision``: "change" (the study's
-    setting moves to the factor's high level for stage 3), "keep", "cause" (it matters toward the paper's behaviour
-    but the paper fixes it: reported, not adopted), "add replicas" (rule 2, with ``replicas_to_tell`` a point) or
-    "fold-over first" (rule 4: a told two-factor chain holds it). ``changes``: the factors to change with their
-    high level's settings; ``decided``: no factor waits on replicas or a fold-over. A screening whose primary
-    response waits for design points decides nothing yet."""
+    setting moves to the factor's high level for stage 3), "keep" (it does not matter, or it matters away from the
+    paper's behaviour), "cause" (it matters toward the paper's behaviour but the paper fixes it: reported, never
+    adopted), "add replicas" (rule 2, with ``replicas_to_tell`` a point), "fold-over first" (rule 4: a told
+    two-factor chain holds it) or "waits for the early signs" (AR-4 MP: a sign not yet read). ``chains``: the told
+    two-factor chains on the primary response (rule 4 reports them). ``changes``: the factors to change with their
+    high level's settings, only once ``decided``: every planned run holds the primary response and the signs, and no
+    factor waits. Before that the entries are a provisional reading (``waiting`` says what is missing); a primary
+    response without effects yet gives none."""
     shape = shape_of(record)
     if shape is None:
         raise ValueError(f"design {record['design']['name']!r}: not one of the screenings "
@@ -80,23 +98,27 @@ def screening_decision(record: dict) -> dict:
     primary = rule["primary"]
     result = record["results"].get(primary, {})
     out = {"shape": shape, "primary": primary, "fixed": FIXED, "rule": _rule_words(shape), "factors": {},
-           "changes": {}, "decided": False}
+           "chains": [], "changes": {}, "decided": False}
     if "effects" not in result:
-        out["waiting"] = result.get("waiting", f"no {primary} in the record")
+        out["waiting"] = _complete(record, primary)
         return out
     if result["confidence"] != CONFIDENCE:
         raise ValueError(f"design.confidence = {result['confidence']}: the rule reads {_percent(CONFIDENCE)} "
                          "intervals")
+    waiting = [w for w in (_complete(record, name) for name in (primary, *rule["signs"])) if w]
     mean = result["mean"]
     effects = _main_effects(result)
     signs = {name: _main_effects(record["results"].get(name, {})) for name in rule["signs"]}
     chains = [e for e in result["effects"] if len(e["term"]) == 2 and _told_way(e)]
+    out["chains"] = [{"chain": _chain(c), "factors": sorted(_chain_letters(c)), "estimate": c["estimate"],
+                      "interval": [c["low"], c["high"]]} for c in chains]
     letters = record["design"]["letters"]
+    changes = {}
     for factor, level in record["design"]["factors"].items():
         e = effects[factor]
         way = _told_way(e)
-        entry = {"estimate": e["estimate"], "interval": [e["low"], e["high"]], "relative": e["estimate"] / mean,
-                 "paper_fixes": PAPER_FIXES.get(factor)}
+        entry = {"estimate": e["estimate"], "interval": [e["low"], e["high"]],
+                 "relative": e["estimate"] / mean if mean else None, "paper_fixes": PAPER_FIXES.get(factor)}
         if e.get("low") is None:
             entry.update(matters=None, decision="add replicas", why="no interval (no error term yet)")
         elif way:
@@ -105,10 +127,10 @@ def screening_decision(record: dict) -> dict:
             entry.update(matters=None, decision="add replicas", replicas_to_tell=e.get("replicas_to_tell"),
                          why=f"the interval reaches both zero and {_percent(MATTERS)} of the mean")
         else:
-            entry["matters"] = False
+            entry.update(matters=False, decision="keep")
         if entry["matters"]:
-            against = [name for name, way_there in rule["signs"].items()
-                       if _told_way(signs[name].get(factor)) == -way_there]
+            against = [name for name, toward in rule["signs"].items() if _told_way(signs[name].get(factor)) == -toward]
+            unread = [name for name in rule["signs"] if factor not in signs[name]]
             entry["toward_paper"] = way == rule["toward"] and not against
             if against:
                 entry["signs_against"] = against
@@ -117,15 +139,19 @@ def screening_decision(record: dict) -> dict:
                 entry["decision"] = "keep"
             elif entry["paper_fixes"]:
                 entry["decision"] = "cause"
+            elif unread:
+                entry.update(decision="waits for the early signs", why=f"no effects yet on {', '.join(unread)}")
             elif held:
                 entry.update(decision="fold-over first", chains=held)
             else:
                 entry["decision"] = "change"
-                out["changes"][factor] = level["high"]
-        elif entry["matters"] is False:
-            entry["decision"] = "keep"
+                changes[factor] = level["high"]
         out["factors"][factor] = entry
-    out["decided"] = all(f["decision"] in ("change", "keep", "cause") for f in out["factors"].values())
+    if waiting:
+        out["waiting"] = "; ".join(waiting)
+    out["decided"] = not waiting and all(f["decision"] in ("change", "keep", "cause") for f in out["factors"].values())
+    if out["decided"]:
+        out["changes"] = changes
     return out
 
 
@@ -153,24 +179,31 @@ def _rule_words(shape: str) -> str:
 
 def confirmation(low: list, high: list, screened: dict) -> dict:
     """Stage 3's confirmation of a factor at new contact settings: the primary response of 3 runs at the factor's
-    ``low`` level and 3 at its ``high`` (more are read as they are), the 95 % interval of high less low by Welch's
-    t; it **confirms** where the interval excludes zero on the side of the screening's effect (``screened``: the
-    factor's entry of ``screening_decision``), "does not confirm" where it does not (the factor then stays at its
-    study setting), "open" with fewer than two runs a side."""
+    ``low`` level and 3 at its ``high`` (more are read as they are), rule 2 of the screening on the difference of
+    the means (high less low, its 95 % interval by Welch's t). It **confirms** where the interval excludes zero on
+    the side of the screening's effect (``screened``: the factor's entry of ``screening_decision``); it asks
+    "add runs" where the interval reaches both zero and 10 % of the runs' mean (rule 2: runs before a decision);
+    else it "does not confirm" (told the other way, or told small: the factor stays at its study setting). "open"
+    with fewer than two runs a side."""
     from scipy.stats import t as student
     out = {"runs": [len(low), len(high)], "screened": screened["estimate"]}
     if len(low) < 2 or len(high) < 2:
         out["verdict"] = "open"
         return out
-    mean = [sum(x) / len(x) for x in (low, high)]
-    var = [sum((v - m) ** 2 for v in x) / (len(x) - 1) for x, m in zip((low, high), mean)]
-    terms = [v / len(x) for v, x in zip(var, (low, high))]
-    se = math.sqrt(sum(terms))
-    below = sum(term * term / (len(x) - 1) for term, x in zip(terms, (low, high)))
+    sides = (low, high)
+    mean = [sum(x) / len(x) for x in sides]
+    terms = [sum((v - m) ** 2 for v in x) / (len(x) - 1) / len(x) for x, m in zip(sides, mean)]
+    below = sum(term * term / (len(x) - 1) for term, x in zip(terms, sides))
     df = sum(terms) ** 2 / below if below > 0 else math.inf
-    half = float(student.ppf(0.5 + CONFIDENCE / 2, df)) * se if math.isfinite(df) else 0.0
+    half = float(student.ppf(0.5 + CONFIDENCE / 2, df)) * math.sqrt(sum(terms)) if math.isfinite(df) else 0.0
     difference = mean[1] - mean[0]
-    out.update(estimate=difference, interval=[difference - half, difference + half], df=df)
-    same_side = (difference - half > 0) if screened["estimate"] > 0 else (difference + half < 0)
-    out["verdict"] = "confirms" if same_side else "does not confirm"
+    bounds = [difference - half, difference + half]
+    size = MATTERS * abs(sum(low) + sum(high)) / (len(low) + len(high))
+    out.update(estimate=difference, interval=bounds, df=df)
+    if bounds[0] > 0 or bounds[1] < 0:
+        out["verdict"] = "confirms" if (difference > 0) == (screened["estimate"] > 0) else "does not confirm"
+    elif bounds[1] >= size or bounds[0] <= -size:
+        out["verdict"] = "add runs"
+    else:
+        out["verdict"] = "does not confirm"
     return out
