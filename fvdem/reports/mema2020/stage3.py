@@ -1,0 +1,140 @@
+"""Stage 3's study file composed from the decisions (issue 66, docs/bed-dynamics.md, "Stage 3", composition fixed on
+2026-12-07 before any of its runs), so that the re-run of the paper's study follows from the archived decisions
+alone:
+
+1. *Settings*, per shape (AR-1: the families on ``ar1.toml``; AR-4 MP's decisions for the three AR-4 families on
+   ``ar4_mp.toml``, ``ar4_sp.toml``, ``ar4_mp_drag.toml``): stage 2's, with the contact settings' choice, each screening
+   factor rule 3 changes (confirmed at the new contact settings where those change too: ``confirmation_study``), and
+   the velocity reference of the Umf rule (``umf_reference``). Run settings go to the shape's families; its beds
+   take a bed preparation, and settle at their own case's contact settings (the paper's), as the beds of the runs
+   that decided the contact settings did (``tools/stage3_study.py`` gives both).
+2. *Points*: every point of a shape whose settings change, from its base families (stage 2's families less the
+   replica series ``<family>_t95`` and ``<family>_expansion``, which the plan's rounds bring back); a shape without a
+   change keeps stage 2's families, beds and points as they were, so that ``fvdem study --adopt`` counts its runs as
+   they are.
+3. *Replicas*: two a point for a changed shape (one where stage 2 ran one: the roofed points of the paper's column,
+   kept for the record); then the rounds of ``plan.toml``.
+"""
+from __future__ import annotations
+
+import copy
+from pathlib import PurePosixPath
+
+from .families import EXPANSION, T95_ONLY
+
+CONTACT_KEYS = ("contact.normal_stiffness", "time.dem_step", "gas.cfd_step")  # the contact settings' choice
+SHAPE_CASES = {"AR-1": {"ar1.toml", "bed_ar1.toml"},
+               "AR-4 MP": {"ar4_mp.toml", "ar4_sp.toml", "ar4_mp_drag.toml", "bed_ar4.toml"}}
+EXPERIMENT_UMF = {"AR-1": 1.58, "AR-4 MP": 1.7}  # [m/s] Mema et al., Table 6
+UMF_WITHIN = 0.05  # the Umf rule: within this of the experiment, the study returns to the paper's velocity definition
+REPLICAS = 2  # a changed shape's replicas a point (stage 2's)
+CONFIRM_REPLICAS = 3  # a factor's runs a level in its confirmation at new contact settings
+
+
+def shape_of_case(path: str) -> str | None:
+    """The shape a family's or bed's case file is of (by its file name), or None."""
+    name = PurePosixPath(path).name
+    return next((shape for shape, cases in SHAPE_CASES.items() if name in cases), None)
+
+
+def umf_reference(shape: str, measured: float) -> dict:
+    """The Umf rule (docs/bed-dynamics.md, "Umf with the preferred bed"): fvdem's Umf with the preferred bed within
+    5 % of the experiment's, the study returns to the paper's velocity definition (``gas.umf`` the experiment's);
+    beyond, U/Umf stays referred to fvdem's own Umf (``umf`` None: stage 2's reference kept)."""
+    experiment = EXPERIMENT_UMF[shape]
+    off = measured / experiment - 1.0
+    return {"measured": measured, "experiment": experiment, "relative": off,
+            "umf": experiment if abs(off) <= UMF_WITHIN else None}
+
+
+def _families(entry: dict) -> list:
+    family = entry.get("family")
+    return [] if family is None else [family] if isinstance(family, str) else list(family)
+
+
+def _with_families(entry: dict, families: list) -> dict:
+    return {**entry, "family": families[0] if len(families) == 1 else families}
+
+
+def compose_stage3(stage2: dict, changes: dict, header: str = "") -> dict:
+    """Stage 3's study table from stage 2's (``stage2``: the parsed study file) and ``changes``: per shape that
+    changes, ``{"set": run settings, "bed": bed settings}`` (the contact settings in both, a factor's run settings in
+    ``set``, a bed preparation in ``bed``, ``gas.umf`` in ``set``). A shape absent from ``changes`` (or with both
+    empty) keeps stage 2's tables as they were."""
+    changed = {shape for shape, c in changes.items() if c.get("set") or c.get("bed")}
+    unknown = set(changes) - set(SHAPE_CASES)
+    if unknown:
+        raise ValueError(f"changes for {sorted(unknown)}: the shapes are {', '.join(SHAPE_CASES)}")
+    out = {k: copy.deepcopy(v) for k, v in stage2.items() if k not in ("families", "beds", "points", "exclude",
+                                                                          "durations")}
+    out["name"] = "mema2020_stage3"
+    out["description"] = ("Mema et al. (2020), the 22 runs at the decided settings (issue 66): "
+                          + (", ".join(f"{s} changed" for s in sorted(changed)) or "nothing changed"))
+    out["replicas"] = REPLICAS
+    kept = {}
+    for name, family in stage2["families"].items():
+        shape = shape_of_case(family["case"])
+        if shape in changed:
+            if name.endswith(T95_ONLY) or name.endswith(EXPANSION):
+                continue  # a replica series: the plan's rounds bring it back
+            family = {**family, "set": {**family.get("set", {}), **changes[shape].get("set", {})}}
+            family.pop("replicas", None)
+        kept[name] = copy.deepcopy(family)
+    used = {f.get("bed") for f in kept.values()}
+    beds = {}
+    for name, bed in stage2.get("beds", {}).items():
+        shape = shape_of_case(bed["case"])
+        if shape in changed and name not in used:
+            continue
+        if shape in changed:
+            bed = {**bed, "set": {**bed.get("set", {}), **changes[shape].get("bed", {})}}
+        beds[name] = copy.deepcopy(bed)
+    out["beds"], out["families"] = beds, kept
+    for key in ("points", "exclude", "durations"):
+        entries = []
+        for entry in stage2.get(key, []):
+            named = _families(entry)
+            if not named:
+                entries.append(copy.deepcopy(entry))
+                continue
+            for group in ([f for f in named if f in kept and shape_of_case(kept[f]["case"]) in changed],
+                          [f for f in named if f in kept and shape_of_case(kept[f]["case"]) not in changed]):
+                if not group:
+                    continue
+                entry_ = _with_families(copy.deepcopy(entry), group)
+                if key == "points" and shape_of_case(kept[group[0]]["case"]) in changed:
+                    if "replicas" in entry_:
+                        entry_["replicas"] = min(entry_["replicas"], REPLICAS)
+                    if set(entry_) <= {"family", "gas.u_over_umf", "replicas"} and entry_.get("replicas") == REPLICAS:
+                        continue  # the study's two a point: the entry says nothing more
+                entries.append(entry_)
+        if entries:
+            out[key] = entries
+    return out
+
+
+def confirmation_study(screening: dict, factors: list, contact: dict) -> dict:
+    """The study that confirms screening factors at new contact settings before stage 3 changes them
+    (docs/bed-dynamics.md, "Stage 3", rule 1): from the screening's study table (``screening``), per factor in
+    ``factors`` the families ``<design>_<factor>_low`` and ``_high`` at the screening's point, every other factor
+    at its study setting, ``CONFIRM_REPLICAS`` runs each from their own beds, the runs and beds at the ``contact``
+    settings."""
+    design = screening["design"]
+    out = {"name": f"confirm_{design['name']}",
+           "description": f"{design['name']}: {', '.join(factors)} confirmed at new contact settings "
+                          f"({', '.join(f'{k} = {v:g}' for k, v in contact.items())})",
+           "duration": design.get("duration", screening["duration"]), "report": screening.get("report", "table"),
+           "replicas": CONFIRM_REPLICAS, "settings": {**screening.get("settings", {}), **contact}}
+    out["beds"] = copy.deepcopy(screening.get("beds", {}))
+    out["families"] = {}
+    for factor in factors:
+        if factor not in design["factors"]:
+            raise ValueError(f"factor {factor!r}: not one of {design['name']}'s ({', '.join(design['factors'])})")
+        for level in ("low", "high"):
+            overrides = dict(design["factors"][factor][level])
+            bed = overrides.pop("bed", design.get("bed"))
+            family = {"case": design["case"], "set": {**design.get("set", {}), **overrides}}
+            if bed is not None:
+                family["bed"] = bed
+            out["families"][f"{design['name']}_{factor}_{level}"] = family
+    return out
