@@ -5,7 +5,7 @@ interactions with their confidence intervals (``fvdem.study.design.analyse``), a
 
 A response is a column of the study's table (its report's, e.g. ``bed_expansion``) or a time-series column at a
 simulated time (``kinetic_energy@3.0``: interpolated; a run that has not reached the time holds none yet, one that
-ended before it by its case's stop condition, ``time.stop_after_mixed``, holds its last value there). A
+ended before it by its case's own stop condition, ``fvdem.scenes.stops``, holds its last value there). A
 response listed as ``censored`` (a time a run may end before reaching: it holds none then) takes the run's
 simulated end where the run ended without it, and says so: an effect with censored runs is a bound (the censored
 runs would have taken longer). Effects are computed once every design point holds the response
@@ -46,9 +46,9 @@ def response_value(response: str, row: dict, series, censored: bool):
 
 
 def _ended_early(row: dict) -> bool:
-    """Whether a run ended before its duration by its case's own stop condition (``time.stop_after_mixed``: mixed,
-    and held that long): its state is final, and a time-series response past its end takes its last value (a mixed
-    bed's entropy stays at its ceiling). A run stopped by the study (checkpointed) has not ended."""
+    """Whether a run ended before its duration by its case's own stop condition (``fvdem.scenes.stops``: the state
+    the condition declares final): a time-series response past its end takes its last value. A run stopped by the
+    study (checkpointed) has not ended."""
     end, duration = row.get("simulated_seconds"), row.get("duration")
     return (state_of(row.get("status")) is RunState.ENDED and end is not None and duration is not None
             and end < duration - 1e-9)
