@@ -37,6 +37,15 @@ a stop, the holds done in ``ramp.json``); ``--resume`` continues killed or stopp
 checkpoint, bit for bit (a ramp of the paper's AR-4 bed takes hours). Ctrl-C or SIGTERM stop a ramp
 with its checkpoint written (exit code 130).
 
+``--rising`` measures the fluidization branch instead: the bed settled without gas first (``--preparation
+friction``, as the study's beds settle; or ``frictionless``, denser, its friction given back for the ramp: the
+screenings' "packing" factor), then the inlet stepped up from 0.4 to 2.0 Umf,exp from rest, each velocity held as
+above. Umf is fitted the same way; the output gives the prepared bed's packing (``prepared_solids_fraction``,
+``prepared_bed_height``) beside the packing it ends at. A settled bed's interlocking may hold the pressure drop
+above W/A just past Umf (an overshoot): the fixed-bed branch ends at the first hold at 0.85 W/A, before it.
+
+    python tools/validate_umf.py --rising --preparation frictionless --json
+
 Prints progress, writes ``umf_<shape>[_<closures>].png`` (pressure drop over weight against U)
 and, as the last line, one JSON object.
 """
@@ -65,6 +74,31 @@ EXPERIMENT = {"sphere": 1.58, "spherocylinder": 1.7}
 
 SETTINGS = {"paper": {"normal_stiffness": 2.0e4, "dem_step": 1e-5, "cfd_step": 1e-4},
             "default": {"normal_stiffness": 800.0, "dem_step": 5e-5, "cfd_step": 5e-4}}
+
+
+# the rising ramp's bed preparations: the contact settings it settles at (the ramp itself at the case's own)
+PREPARATIONS = {"friction": {}, "frictionless": {"friction": 0.0, "rolling_friction": 0.0}}
+RISING = [0.4, 0.5, 0.65, 0.75, 0.85, 0.95, 1.05, 1.15, 1.3, 1.45, 1.7, 2.0]  # x Umf,exp
+FALLING = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
+
+
+def settled_state(table: dict, folder: Path, preparation: str) -> Path:
+    """The ramp's bed settled without gas (``time.stop_when_settled``) at the ``preparation``'s contact settings,
+    its ``final_state.npz`` in ``folder`` (kept: a resumed ramp settles nothing again; a settling killed midway
+    continues from its checkpoint)."""
+    state = folder / "final_state.npz"
+    if state.exists():
+        return state
+    settle = json.loads(json.dumps(table))
+    settle["name"] = f"settle_{preparation}"
+    settle["gas"] = {"enabled": False}
+    settle["coupling"] = {}
+    settle["contact"].update(PREPARATIONS[preparation])
+    settle["time"].update(end=3.0, stop_when_settled=True, settled_speed=0.005, min_time=0.3)
+    settle["output"] = {"progress": False, "vtk": False, "checkpoint_interval": 0.05}
+    resume = (folder / "checkpoint.npz").exists()
+    fvdem.Simulation(case_from_dict(settle), folder, resume=resume, overwrite=not resume, progress=False).run()
+    return state
 
 
 def build_case(shape, closures, particles, threads, width=0.06, settings="paper", drag="paper"):
@@ -162,21 +196,28 @@ def ramp(spec, threads=None):
     tag = shape if shape == "sphere" else f"{shape}_{o['closures']}"
     if o["drag"] != "paper":
         tag += f"_{o['drag']}"
+    rising = bool(o.get("rising"))
+    if rising:
+        tag += f"_rising_{o.get('preparation') or 'friction'}"
     table = reduced_bed_table(shape, o["closures"], o["particles"], o["threads"], o["width"], o["settings"],
                               o["drag"])
     # checkpoints every 0.05 s and where run() ends (a stop); samples every SAMPLE s; no snapshots
     table["output"].update(timeseries_interval=SAMPLE, checkpoint_interval=0.05, vtk=False)
-    ratios = [2.0, 1.7, 1.45, 1.3, 1.15, 1.05, 0.95, 0.85, 0.75, 0.65, 0.5, 0.4]
+    ratios = list(RISING if rising else FALLING)
     if o["quick"]:
-        ratios = [2.0, 1.3, 1.0, 0.7, 0.4]
+        ratios = [0.4, 0.7, 1.0, 1.3, 2.0] if rising else [2.0, 1.3, 1.0, 0.7, 0.4]
+    start = 0.0 if rising else o["start"]  # a rising ramp starts from rest at its first velocity
+    if rising:  # from the prepared bed, its friction the case's own
+        prepared = settled_state(table, Path(o["out"]) / f"settle_{tag}", o.get("preparation") or "friction")
+        table["particles"]["initial_state"] = str(prepared.resolve())
     # the fluidized holds (at and above 1.3 Umf,exp: the plateau) may be longer: a slugging bed's
     # pressure drop swings over ~0.5 s, so a 0.25 s hold averages a fraction of one swing
     plateau_hold = o.get("plateau_hold") or o["hold"]
     holds = [plateau_hold if ratio >= FLUIDIZED_FROM else o["hold"] for ratio in ratios]
     # the inlet rises linearly over the start (a full-speed start lifts the packed bed as one plug), then
     # steps down through the holds: the case's inlet schedule
-    steps, ends = defluidization_steps(o["start"], [ratio * umf_exp for ratio in ratios], holds)
-    table["gas"].update(inlet_ramp=o["start"], inlet_steps=[list(pair) for pair in steps])
+    steps, ends = defluidization_steps(start, [ratio * umf_exp for ratio in ratios], holds)
+    table["gas"].update(inlet_ramp=start, inlet_steps=[list(pair) for pair in steps])
     case = case_from_dict(table)
     folder = Path(o["out"]) / f"ramp_{tag}"
     progress_file = folder / "ramp.json"
@@ -187,15 +228,18 @@ def ramp(spec, threads=None):
     box = case.domain
     area = float(np.prod(np.asarray(box.upper[:2]) - np.asarray(box.lower[:2])))
     solid_volume = float(spherocylinder_volume(sim.particles.radius, sim.particles.half_length).sum())
-    curve = json.loads(progress_file.read_text())["curve"] if resume else []
+    record = json.loads(progress_file.read_text()) if resume else {"tag": tag}
+    curve = record.get("curve", [])
+    if not resume and rising:  # the prepared bed, before the gas moves it
+        record["prepared"] = {k: float(v) for k, v in packed_state(sim).items() if k in ("solids_fraction", "bed_top")}
     if resume:
         print(f"{tag}: resumed at t = {sim.time:.4f} s after {len(curve)} of {len(ratios)} holds", flush=True)
     else:  # from the first step on: a ramp stopped or killed inside its start resumes too
-        progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
-    if sim.time < o["start"] - 0.5 * SAMPLE:  # the start (all of it, or its rest after a stop)
-        sim.run(o["start"] - sim.time)
+        progress_file.write_text(json.dumps({**record, "curve": curve}) + "\n")
+    if sim.time < start - 0.5 * SAMPLE:  # the start (all of it, or its rest after a stop)
+        sim.run(start - sim.time)
         _stopped(sim, tag)
-        progress_file.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
+        progress_file.write_text(json.dumps({**record, "curve": curve}) + "\n")
     for k in range(len(curve), len(ratios)):
         # a hold from its start, or its rest after a stop (a stop's checkpoint falls inside a hold; a
         # kill between a hold's end checkpoint and its record leaves nothing to run: the point is
@@ -206,7 +250,7 @@ def ramp(spec, threads=None):
             _stopped(sim, tag)
         curve.append(_hold_entry(sim, folder, u, holds[k], weight, solid_volume, area))
         tmp = progress_file.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"tag": tag, "curve": curve}) + "\n")
+        tmp.write_text(json.dumps({**record, "curve": curve}) + "\n")
         tmp.replace(progress_file)
         c = curve[-1]
         print(f"{tag}: U = {u:.3f} m/s ({ratio:.2f} Umf_exp): pressure drop {c['pressure_drop']:.1f} Pa = "
@@ -236,7 +280,7 @@ def ramp(spec, threads=None):
     packing = packed_state(sim)
     closure_umf = uniform_bed_umf(sim.bridge.model, 1.0 - packing["solids_fraction"], packing["axes"], p.density)
     png = Path(o["out"]) / f"umf_{tag}.png"
-    _plot(png, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag)
+    _plot(png, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag, "fluidization" if rising else "defluidization")
     # the defluidized bed, for tools/fixed_bed_layers.py --state (its structure without its motion)
     state = Path(o["out"]) / f"umf_{tag}_defluidized.npz"
     order = np.argsort(sim.particles.ids, kind="stable")
@@ -261,8 +305,12 @@ def ramp(spec, threads=None):
                f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
                "property of particles and gas)",
         "settings": o["settings"],
+        "direction": "rising" if rising else "falling",
+        "preparation": (o.get("preparation") or "friction") if rising else None,
+        "prepared_solids_fraction": record["prepared"]["solids_fraction"] if rising else None,
+        "prepared_bed_height": record["prepared"]["bed_top"] if rising else None,
         "hold_seconds": o["hold"], "plateau_hold_seconds": plateau_hold,
-        "column_height": float(case.domain.upper[2]), "inlet_ramp_seconds": o["start"],
+        "column_height": float(case.domain.upper[2]), "inlet_ramp_seconds": start,
         "plateau_holds_touching_roof": sum(r for r, c in zip(roofed, curve)
                                            if c["velocity"] >= FLUIDIZED_FROM * umf_exp), "curve": curve, "plot": str(png), "defluidized_state": str(state),
         "wall_seconds": time.perf_counter() - wall0, "cpu_seconds": time.process_time() - cpu0,
@@ -295,6 +343,11 @@ def main(argv=None):
     parser.add_argument("--out", default=".")
     parser.add_argument("--resume", action="store_true",
                         help="continue killed or stopped ramps from their last checkpoint (OUT/ramp_<tag>)")
+    parser.add_argument("--rising", action="store_true",
+                        help="the fluidization branch: the bed settled first, the inlet stepped up from rest")
+    parser.add_argument("--preparation", choices=tuple(PREPARATIONS),
+                        help="with --rising: how the bed settles (friction: as the study's beds; frictionless: "
+                             "denser, its friction given back for the ramp); default friction")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
                         help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
@@ -302,13 +355,16 @@ def main(argv=None):
     if args.combine:
         print(_combined_plot(Path(args.out) / "umf_compare.png", args.combine))
         return
+    if args.preparation and not args.rising:
+        parser.exit(2, f"--preparation {args.preparation}: only with --rising (a falling ramp starts fluidized: "
+                       "its bed's preparation is gone before the first hold)\n")
     if args.quick:
         args.particles, args.hold, args.start = 500, 0.06, 0.15
     Path(args.out).mkdir(parents=True, exist_ok=True)  # before the ramp: its chart must not fail after it
     specs = [{"shape": shape, "closures": args.closures, "particles": args.particles, "threads": args.threads,
               "width": args.width, "settings": args.settings, "drag": drag, "hold": args.hold, "start": args.start,
               "quick": args.quick, "out": str(Path(args.out).resolve()), "resume": args.resume,
-              "plateau_hold": args.plateau_hold}
+              "plateau_hold": args.plateau_hold, "rising": args.rising, "preparation": args.preparation}
              for shape in args.shape for drag in args.drag]
     if len(specs) == 1:  # one ramp: in this process, its output as before
         try:
@@ -359,7 +415,8 @@ def _combined_plot(path, outputs, results=None):
         width = r["bed"].split(" column")[0].split("in a ")[-1]
         found = r["umf_simulated"] is not None
         label = (f"{shape}, {r['drag']}, {r['bed'].split(' particles')[0]} in {width} ({r['settings']}): "
-                 + (f"Umf {r['umf_simulated']:.2f} m/s ({r['relative_error']:+.0%})" if found else "no Umf found"))
+                 + (f"Umf {r['umf_simulated']:.2f} m/s ({r['relative_error']:+.0%})" if found else "no Umf found")
+                 + (f", rising from a {r['preparation']} bed" if r.get("direction") == "rising" else ""))
         line, = ax.plot(u, [c["over_weight"] for c in r["curve"]], "o-", ms=3, label=label)
         if found:
             ax.axvline(r["umf_simulated"] / exp, color=line.get_color(), ls=":", lw=1)
@@ -369,17 +426,18 @@ def _combined_plot(path, outputs, results=None):
     ax.axhline(1.0, color="k", lw=0.5)
     ax.set_xlabel("U / Umf,experiment")
     ax.set_ylabel("bed pressure drop / (W/A)")
-    ax.set_title("defluidization ramps; triangles: the closure's own Umf at the ramp's packing", fontsize=9)
+    ax.set_title("ramps (defluidization unless said); triangles: the closure's own Umf at the ramp's packing",
+                 fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=6.5, loc="lower right")
     return _save(fig, path)
 
 
-def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag):
+def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag, direction="defluidization"):
     from fvdem.analysis.plots import _pyplot, _save
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(velocity, np.asarray(drop) / weight, "o-", label="simulated (defluidization)")
+    ax.plot(velocity, np.asarray(drop) / weight, "o-", label=f"simulated ({direction})")
     u = np.linspace(0, max(velocity), 100)
     if umf is not None:
         ax.plot(u, np.minimum(a * u + b * u * u, plateau) / weight, "--", color="grey", label="fixed-bed fit / plateau")
@@ -388,7 +446,7 @@ def _plot(path, velocity, drop, weight, plateau, umf, a, b, umf_exp, tag):
     ax.axhline(1.0, color="k", lw=0.5)
     ax.set_xlabel("superficial gas velocity U [m/s]")
     ax.set_ylabel("bed pressure drop / (W/A)")
-    ax.set_title(f"defluidization, {tag}")
+    ax.set_title(f"{direction}, {tag}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     _save(fig, path)

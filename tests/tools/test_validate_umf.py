@@ -165,3 +165,28 @@ def test_the_acceleration_correction_recovers_the_long_time_mean_from_a_fraction
     _write_series(tmp_path, t, {"bed_pressure_drop": drop, "bed_top": np.full_like(t, 0.3)})
     assert hold_statistics(read_timeseries(tmp_path), 0.8, hold, tool.SAMPLE, area)[3] is None
     assert hold_statistics(read_timeseries(tmp_path), 0.8, hold, tool.SAMPLE)[0] == pytest.approx(mean)
+
+
+def test_a_rising_ramp_steps_up_from_the_prepared_bed_and_a_frictionless_settling_packs_denser(tmp_path):
+    """--rising: the bed settles without gas first, then the inlet steps up from rest (no start-up ramp). Settled
+    frictionless (the screenings' denser "packing") the bed packs denser and lower than settled with friction, as
+    frictionless spheres approach random close packing (Scott & Kilgour 1969: 0.64) and frictional ones settle
+    looser; the ramp itself runs at the case's own friction. A second call reuses the settled bed."""
+    import tomllib
+    spec = {"shape": "sphere", "closures": "mp", "particles": 500, "threads": 1, "width": 0.06,
+            "settings": "default", "drag": "paper", "hold": 0.06, "start": 0.15, "quick": True,
+            "plateau_hold": None, "rising": True, "preparation": "friction", "out": str(tmp_path)}
+    loose = tool.ramp(spec)
+    dense = tool.ramp(dict(spec, preparation="frictionless"))
+    assert dense["prepared_solids_fraction"] > loose["prepared_solids_fraction"] + 0.02
+    assert dense["prepared_bed_height"] < loose["prepared_bed_height"]
+    for r in (loose, dense):
+        velocity = [c["velocity"] for c in r["curve"]]
+        assert velocity == sorted(velocity) and r["inlet_ramp_seconds"] == 0.0 and r["direction"] == "rising"
+        assert r["curve"][0]["end_time"] == pytest.approx(0.06)
+    case = tomllib.loads((tmp_path / "ramp_sphere_rising_frictionless" / "case.toml").read_text())
+    assert case["contact"]["friction"] == 0.46 and case["contact"]["rolling_friction"] == 0.46
+    state = tmp_path / "settle_sphere_rising_frictionless" / "final_state.npz"
+    before = state.stat().st_mtime_ns
+    assert tool.ramp(dict(spec, preparation="frictionless"))["curve"] == dense["curve"]
+    assert state.stat().st_mtime_ns == before
