@@ -201,6 +201,8 @@ def ramp(spec, threads=None):
         tag += f"_rising_{o.get('preparation') or 'friction'}"
     table = reduced_bed_table(shape, o["closures"], o["particles"], o["threads"], o["width"], o["settings"],
                               o["drag"])
+    if o.get("seed") is not None:  # another realization of the bed (replicas of a ramp)
+        table["particles"]["insertion"]["seed"] = int(o["seed"])
     # checkpoints every 0.05 s and where run() ends (a stop); samples every SAMPLE s; no snapshots
     table["output"].update(timeseries_interval=SAMPLE, checkpoint_interval=0.05, vtk=False)
     ratios = list(RISING if rising else FALLING)
@@ -304,7 +306,7 @@ def ramp(spec, threads=None):
         "bed": f"{p.count} particles in a {o['width']:g} x {o['width']:g} m column, 15 mm cells, packed height "
                f"{packing['bed_top']:.3f} m (the paper's bed: 32,500 in 0.15 x 0.15 m, about 0.2 m; Umf is a "
                "property of particles and gas)",
-        "settings": o["settings"],
+        "settings": o["settings"], "seed": table["particles"]["insertion"]["seed"],
         "direction": "rising" if rising else "falling",
         "preparation": (o.get("preparation") or "friction") if rising else None,
         "prepared_solids_fraction": record["prepared"]["solids_fraction"] if rising else None,
@@ -348,6 +350,7 @@ def main(argv=None):
     parser.add_argument("--preparation", choices=tuple(PREPARATIONS),
                         help="with --rising: how the bed settles (friction: as the study's beds; frictionless: "
                              "denser, its friction given back for the ramp); default friction")
+    parser.add_argument("--seed", type=int, help="the bed's insertion seed (default 7): replicas of a ramp")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--combine", nargs="+", metavar="OUTPUT",
                         help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
@@ -364,7 +367,8 @@ def main(argv=None):
     specs = [{"shape": shape, "closures": args.closures, "particles": args.particles, "threads": args.threads,
               "width": args.width, "settings": args.settings, "drag": drag, "hold": args.hold, "start": args.start,
               "quick": args.quick, "out": str(Path(args.out).resolve()), "resume": args.resume,
-              "plateau_hold": args.plateau_hold, "rising": args.rising, "preparation": args.preparation}
+              "plateau_hold": args.plateau_hold, "rising": args.rising, "preparation": args.preparation,
+              "seed": args.seed}
              for shape in args.shape for drag in args.drag]
     if len(specs) == 1:  # one ramp: in this process, its output as before
         try:
