@@ -119,7 +119,8 @@ def main(argv=None) -> int:
         try:
             umf[UMF_NAMES[shape]] = float(value)
         except (KeyError, ValueError):
-            parser.exit(2, f"--umf {item}: SHAPE=VALUE with SHAPE one of AR-1, AR-4 and VALUE in m/s (e.g. AR-1=1.62)\n")
+            parser.exit(2, f"--umf {item}: SHAPE=VALUE with SHAPE one of AR-1, AR-4 and VALUE in m/s "
+                           "(e.g. AR-1=1.62)\n")
     contact_archives = args.contact_archives or [a for a in CONTACT_ARCHIVES if (a / "study.json").exists()]
     screenings = args.screenings or [a for a in SCREENING_ARCHIVES if (a / "study.json").exists()]
     for archive in [*contact_archives, *screenings, *args.confirmations]:
@@ -192,8 +193,8 @@ def main(argv=None) -> int:
                      + ("the paper's velocity definition" if entry["umf"]["umf"] else "fvdem's own Umf kept"))
     if not waiting:
         study = compose_stage3(stage2, changes)
-        _write(args.out, _header(["Stage 3 of Mema et al.'s study (issue 66): stage 2's points at the decided settings, "
-                                  "composed by tools/stage3_study.py (docs/bed-dynamics.md, Stage 3)", *notes,
+        _write(args.out, _header(["Stage 3 of Mema et al.'s study (issue 66): stage 2's points at the decided "
+                                  "settings, composed by tools/stage3_study.py (docs/bed-dynamics.md, Stage 3)", *notes,
                                   f"  fvdem study {args.out.name} --out ~/fvdem-runs/mema2020_stage3 --workers 2 "
                                   "--adopt docs/data/mema2020"]) + tomli_w.dumps(study), written, parser)
     result = {"ready": not waiting, "waiting": waiting, "shapes": out, "written": written}

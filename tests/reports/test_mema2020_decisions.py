@@ -31,7 +31,8 @@ def _screen(tmp_path, name, factors, generators, responses, effects, noise, seed
     built = two_level(len(factors), generators)
     design = {"name": name, "label": built.label(), "letters": letters, "generators": generators,
               "defining_relation": built.defining_relation(), "resolution": built.resolution,
-              "aliases": {x: built.aliases(x) for x in built.letters}, "replicas": planned or replicas, "centre_points": 0,
+              "aliases": {x: built.aliases(x) for x in built.letters}, "replicas": planned or replicas,
+              "centre_points": 0,
               "responses": responses, "censored": [], "confidence": 0.95,
               "factors": {f: {"letter": letter, "low": {}, "high": high} for f, (letter, high) in factors.items()}}
     rng = np.random.default_rng(seed)
