@@ -8,10 +8,11 @@ contact settings where those change too (``decisions.confirmation``), and the ve
     python tools/stage3_study.py --umf AR-1=1.62 AR-4=1.80 --confirmations docs/data/confirm_ar1 --json
 
 Until every decision is taken it writes nothing but says what waits. Where a shape's contact settings change and its
-screening changes factors, the confirmation study comes first: it is written to ``studies/confirm_<design>.toml``
-(``--confirm-dir``) for ``fvdem study`` to run, and its archive read with ``--confirmations``. ``--umf SHAPE=VALUE``:
-fvdem's Umf with the preferred bed (``tools/validate_umf.py``), AR-4 for the AR-4 bed (MP closures). Existing files
-are never overwritten (exit 2). ``--quick`` reads the archives' committed tables and records as they are (else each
+screening changes factors, the confirmation study comes first: it is written once to
+``studies/confirm_<design>.toml`` (``--confirm-dir``) for ``fvdem study`` to run, and its archive read with
+``--confirmations``; where a factor's confirmation asks more runs, the tool says to what to raise its replicas.
+``--umf SHAPE=VALUE``: fvdem's Umf with the preferred bed (``tools/validate_umf.py``), AR-4 for the AR-4 bed (MP
+closures). A stage-3 file that exists is never overwritten (exit 2). ``--quick`` reads the archives' committed tables and records as they are (else each
 report is rebuilt in a scratch copy). The last line is one JSON object: ``ready``, ``waiting``, per shape what was
 decided, and the files written."""
 from __future__ import annotations
@@ -29,8 +30,8 @@ from fvdem.analysis.plots import read_timeseries
 from fvdem.case import load_case
 from fvdem.reports.mema2020.decisions import SCREENINGS, confirmation, screening_decision
 from fvdem.reports.mema2020.readings import SHAPES, contact_candidates
-from fvdem.reports.mema2020.stage3 import (CONTACT_KEYS, EXPERIMENT_UMF, compose_stage3, confirmation_study,
-                                           shape_of_case, umf_reference)
+from fvdem.reports.mema2020.stage3 import (CONFIRM_REPLICAS, CONTACT_KEYS, EXPERIMENT_UMF, compose_stage3,
+                                           confirmation_study, shape_of_case, umf_reference)
 from fvdem.study.records import RunState, folder_case, state_of
 from fvdem.study.screening import response_value
 
@@ -61,11 +62,10 @@ BED_CONTACT = ("contact.normal_stiffness", "time.dem_step")  # what settles a be
 def bed_contact(stage2: dict, path: Path, shape: str) -> dict:
     """The contact settings a shape's beds settle at in stage 3: their own case's (the paper's), as the beds of the
     runs that decided the contact settings settled (``studies/contact_paper.toml`` and ``contact_candidates.toml``
-    set no contact keys), where stage 2's settings set others."""
+    set no contact keys), named whatever stage 2's settings set."""
     bed = next(b for b in stage2["beds"].values() if shape_of_case(b["case"]) == shape)
     case = load_case(path.parent / bed["case"])
-    own = {key: case_value(case, key) for key in BED_CONTACT}
-    return {k: v for k, v in own.items() if stage2["settings"].get(k, v) != v}
+    return {key: case_value(case, key) for key in BED_CONTACT}
 
 
 def confirmed(archives: list, shape: str, decision: dict) -> dict:
@@ -82,7 +82,7 @@ def confirmed(archives: list, shape: str, decision: dict) -> dict:
             value, _ = response_value(primary, row, series, False)
             if value is not None:
                 values.setdefault(row["family"], []).append(value)
-    return {factor: confirmation(values.get(f"{design}_{factor}_low", []), values.get(f"{design}_{factor}_high", []),
+    return {factor: confirmation(values.get(f"{design}_base", []), values.get(f"{design}_{factor}", []),
                                  decision["factors"][factor]) for factor in decision["changes"]}
 
 
@@ -158,20 +158,27 @@ def main(argv=None) -> int:
             waiting.append(f"{shape}: its screening ({decision.get('waiting') or 'factors wait for replicas'})")
             continue
         factors = dict(decision["changes"])
+        settle = bed_contact(stage2, args.stage2, shape) if contact else {}
         if contact and factors:  # confirmed at the new contact settings first
             verdicts = confirmed(args.confirmations, shape, decision) if args.confirmations else {}
             entry["confirmation"] = verdicts
             if not verdicts or any(v["verdict"] in ("open", "add runs") for v in verdicts.values()):
-                study = confirmation_study(screening_table, list(factors), contact)
+                study = confirmation_study(screening_table, list(factors), contact, settle)
                 path = args.confirm_dir / f"{study['name']}.toml"
-                _write(path, _header([f"{shape}: the screening's changes confirmed at the new contact settings "
-                                      "(docs/bed-dynamics.md, Stage 3, rule 1), written by tools/stage3_study.py",
-                                      f"  fvdem study {path.name} --out ~/fvdem-runs/{study['name']} --workers 1"])
-                       + tomli_w.dumps(study), written, parser)
-                waiting.append(f"{shape}: the confirmation of {', '.join(factors)} ({path})")
+                if not path.exists():  # once: more runs are its replicas raised, the runs so far kept
+                    path.write_text(_header([f"{shape}: the screening's changes confirmed at the new contact "
+                                             "settings (docs/bed-dynamics.md, Stage 3, rule 1), written by "
+                                             "tools/stage3_study.py", f"  fvdem study {path.name} --out "
+                                             f"~/fvdem-runs/{study['name']} --workers 1"]) + tomli_w.dumps(study))
+                    written.append(str(path))
+                more = [f for f, v in verdicts.items() if v["verdict"] == "add runs"]
+                most = max((max(v["runs"]) for v in verdicts.values()), default=0)
+                waiting.append(f"{shape}: the confirmation of {', '.join(factors)} ({path}"
+                               + (f"; {', '.join(more)} within the interval of mattering: raise its replicas to "
+                                  f"{most + CONFIRM_REPLICAS} and run it again" if more else "") + ")")
                 continue
             factors = {f: factors[f] for f, v in verdicts.items() if v["verdict"] == "confirms"}
-        run_set, bed_set = dict(contact), bed_contact(stage2, args.stage2, shape) if contact else {}
+        run_set, bed_set = dict(contact), dict(settle)
         for factor, level in factors.items():
             level = dict(level)
             bed = level.pop("bed", None)

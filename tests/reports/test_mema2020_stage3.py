@@ -66,6 +66,8 @@ def test_a_changed_shape_runs_every_point_twice_at_the_new_settings_and_the_othe
     for name in {r.bed for r in ar1.values()}:
         assert {k: beds[name].overrides[k] for k in bed} == bed  # its beds settle at theirs, with the preparation
     assert {b.name for b in new.beds if "ar1" in b.name} == {r.bed for r in ar1.values()}  # no unused bed
+    # beds of their own names: no stage-2 run of a changed shape passes for a stage-3 one (--adopt)
+    assert not {r.bed for r in ar1.values()} & {b.name for b in old.beds}
 
 
 def test_with_nothing_changed_stage_3_is_stage_2s_study(tmp_path, stage2):
@@ -77,19 +79,22 @@ def test_with_nothing_changed_stage_3_is_stage_2s_study(tmp_path, stage2):
         compose_stage3(table, {"AR-2": {"set": CONTACT}})
 
 
-def test_the_confirmation_study_runs_each_factors_two_levels_three_times_at_the_new_contacts(tmp_path):
+def test_the_confirmation_study_runs_the_base_and_each_factors_high_level_three_times_at_the_new_contacts(
+        tmp_path):
     screening = tomllib.loads((ROOT / "studies" / "screening_ar1.toml").read_text())
-    study = _expand(tmp_path, confirmation_study(screening, ["start", "packing"], CONTACT), "confirm_ar1")
+    settle = {"contact.normal_stiffness": 2.0e4, "time.dem_step": 1.0e-5}
+    study = _expand(tmp_path, confirmation_study(screening, ["start", "packing"], CONTACT, settle), "confirm_ar1")
     assert study.name == "confirm_ar1"
-    assert Counter(r.family for r in study.runs) == {f"ar1_{f}_{level}": CONFIRM_REPLICAS
-                                                     for f in ("start", "packing") for level in ("low", "high")}
+    assert Counter(r.family for r in study.runs) == {f"ar1_{f}": CONFIRM_REPLICAS for f in ("base", "start", "packing")}
     for r in study.runs:
         assert {k: r.overrides[k] for k in CONTACT} == CONTACT and r.overrides["gas.umf"] == 1.914
-        assert r.overrides["gas.inlet_ramp"] == (0.0 if r.family == "ar1_start_high" else 1.0)
-        assert r.bed.startswith("ar1_dense" if r.family == "ar1_packing_high" else "ar1")
+        assert r.overrides["gas.inlet_ramp"] == (0.0 if r.family == "ar1_start" else 1.0)
+        assert r.bed.startswith("ar1_dense" if r.family == "ar1_packing" else "ar1")
         assert r.overrides.get("contact.rolling_friction", 0.46) == 0.46  # the others at their study setting
+    for b in study.beds:  # settled as stage 3's beds, not at the runs' contacts
+        assert {k: b.overrides[k] for k in settle} == settle
     with pytest.raises(ValueError, match="factor 'lift': not one of ar1's"):
-        confirmation_study(screening, ["lift"], CONTACT)
+        confirmation_study(screening, ["lift"], CONTACT, settle)
 
 
 @pytest.mark.parametrize("shape, measured, umf", [("AR-1", 1.65, 1.58), ("AR-1", 1.67, None), ("AR-4 MP", 1.615, 1.7),
@@ -113,7 +118,7 @@ def test_the_tool_writes_nothing_until_every_decision_is_taken_and_says_what_wai
     assert bad.returncode == 2 and "--umf AR-2=1.9: SHAPE=VALUE" in bad.stderr and "Traceback" not in bad.stderr
 
 
-def test_the_tool_writes_the_confirmation_first_and_stage_3_once_it_confirms(tmp_path, monkeypatch, stage2):
+def test_the_tool_writes_the_confirmation_first_and_stage_3_once_it_confirms(tmp_path, monkeypatch, stage2, capsys):
     """The decisions stand in (AR-1: the 3200 N/m candidate and a full-speed start; AR-4 MP: its defaults and no
     change): the tool writes the confirmation study; with a confirmation archive that confirms, stage 3, which the
     study engine expands with AR-1's runs at the new settings and the experiment's Umf (1.62 m/s is within 5 % of
@@ -145,21 +150,32 @@ def test_the_tool_writes_the_confirmation_first_and_stage_3_once_it_confirms(tmp
     confirm = tmp_path / "studies" / "confirm_ar1.toml"
     assert confirm.exists() and not (tmp_path / "studies" / "stage3.toml").exists()
     study = load_study(confirm, tmp_path / "out" / "confirm")
-    assert {r.family for r in study.runs} == {"ar1_start_low", "ar1_start_high"}
-    # its archive: the full-speed start mixes the bed faster at 3 s in 3 runs of 3
-    done = tmp_path / "confirm_archive"
-    (done / "runs").mkdir(parents=True)
-    (done / "study.json").write_text("{}")
-    rows = []
-    for level, entropy in (("low", (0.60, 0.62, 0.58)), ("high", (0.75, 0.78, 0.73))):
-        for k, value in enumerate(entropy, 1):
-            name = f"ar1_start_{level}_r{k}"
-            rows.append({"name": name, "family": f"ar1_start_{level}", "status": "finished",
-                         "simulated_seconds": 7.0, "duration": 7.0})
-            (done / "runs" / name).mkdir()
-            (done / "runs" / name / "timeseries.csv").write_text(f"time,mixing_entropy\n0.0,0.0\n3.0,{value}\n"
-                                                                 f"7.0,0.99\n")
-    (done / "table.json").write_text(json.dumps(rows))
+    assert {r.family for r in study.runs} == {"ar1_base", "ar1_start"}
+    def archive(name, base, high):
+        done = tmp_path / name
+        (done / "runs").mkdir(parents=True)
+        (done / "study.json").write_text("{}")
+        rows = []
+        for family, entropy in (("ar1_base", base), ("ar1_start", high)):
+            for k, value in enumerate(entropy, 1):
+                run = f"{family}_r{k}"
+                rows.append({"name": run, "family": family, "status": "finished", "simulated_seconds": 7.0,
+                             "duration": 7.0})
+                (done / "runs" / run).mkdir()
+                (done / "runs" / run / "timeseries.csv").write_text(f"time,mixing_entropy\n0.0,0.0\n3.0,{value}\n"
+                                                                    "7.0,0.99\n")
+        (done / "table.json").write_text(json.dumps(rows))
+        return done
+    # within its interval of mattering: more runs, the study file kept as it is
+    text = confirm.read_text()
+    unsure = archive("unsure", (0.60, 0.66, 0.55), (0.64, 0.70, 0.61))
+    capsys.readouterr()
+    assert tool.main([*args, "--confirmations", str(unsure)]) == 0
+    said = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert any("start within the interval of mattering: raise its replicas to 6" in w for w in said["waiting"])
+    assert confirm.read_text() == text and not (tmp_path / "studies" / "stage3.toml").exists()
+    # the full-speed start mixes the bed faster at 3 s in 3 runs of 3
+    done = archive("confirm_archive", (0.60, 0.62, 0.58), (0.75, 0.78, 0.73))
     assert tool.main([*args, "--confirmations", str(done)]) == 0
     new = load_study(tmp_path / "studies" / "stage3.toml", tmp_path / "out" / "stage3")
     _, old = stage2

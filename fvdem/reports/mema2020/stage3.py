@@ -5,7 +5,8 @@ alone:
 1. *Settings*, per shape (AR-1: the families on ``ar1.toml``; AR-4 MP's decisions for the three AR-4 families on
    ``ar4_mp.toml``, ``ar4_sp.toml``, ``ar4_mp_drag.toml``): stage 2's, with the contact settings' choice, each screening
    factor rule 3 changes (confirmed at the new contact settings where those change too: ``confirmation_study``), and
-   the velocity reference of the Umf rule (``umf_reference``). Run settings go to the shape's families; its beds
+   the velocity reference of the Umf rule (``umf_reference``: the experiment's Umf within 5 %, else stage 2's own
+   reference kept). Run settings go to the shape's families; its beds
    take a bed preparation, and settle at their own case's contact settings (the paper's), as the beds of the runs
    that decided the contact settings did (``tools/stage3_study.py`` gives both).
 2. *Points*: every point of a shape whose settings change, from its base families (stage 2's families less the
@@ -28,6 +29,7 @@ SHAPE_CASES = {"AR-1": {"ar1.toml", "bed_ar1.toml"},
 EXPERIMENT_UMF = {"AR-1": 1.58, "AR-4 MP": 1.7}  # [m/s] Mema et al., Table 6
 UMF_WITHIN = 0.05  # the Umf rule: within this of the experiment, the study returns to the paper's velocity definition
 REPLICAS = 2  # a changed shape's replicas a point (stage 2's)
+NEW_BED = "_stage3"  # a changed shape's beds: stage 2's names with this (their runs are new runs, never adopted)
 CONFIRM_REPLICAS = 3  # a factor's runs a level in its confirmation at new contact settings
 
 
@@ -77,17 +79,18 @@ def compose_stage3(stage2: dict, changes: dict, header: str = "") -> dict:
         if shape in changed:
             if name.endswith(T95_ONLY) or name.endswith(EXPANSION):
                 continue  # a replica series: the plan's rounds bring it back
-            family = {**family, "set": {**family.get("set", {}), **changes[shape].get("set", {})}}
+            family = {**family, "set": {**family.get("set", {}), **changes[shape].get("set", {})},
+                      "bed": family["bed"] + NEW_BED}
             family.pop("replicas", None)
         kept[name] = copy.deepcopy(family)
     used = {f.get("bed") for f in kept.values()}
     beds = {}
     for name, bed in stage2.get("beds", {}).items():
         shape = shape_of_case(bed["case"])
-        if shape in changed and name not in used:
-            continue
-        if shape in changed:
-            bed = {**bed, "set": {**bed.get("set", {}), **changes[shape].get("bed", {})}}
+        if shape in changed:  # a bed of its own name: no run of stage 2 can pass for one of stage 3 (--adopt)
+            name, bed = name + NEW_BED, {**bed, "set": {**bed.get("set", {}), **changes[shape].get("bed", {})}}
+            if name not in used:
+                continue
         beds[name] = copy.deepcopy(bed)
     out["beds"], out["families"] = beds, kept
     for key in ("points", "exclude", "durations"):
@@ -113,28 +116,33 @@ def compose_stage3(stage2: dict, changes: dict, header: str = "") -> dict:
     return out
 
 
-def confirmation_study(screening: dict, factors: list, contact: dict) -> dict:
+def confirmation_study(screening: dict, factors: list, contact: dict, bed_contact: dict) -> dict:
     """The study that confirms screening factors at new contact settings before stage 3 changes them
-    (docs/bed-dynamics.md, "Stage 3", rule 1): from the screening's study table (``screening``), per factor in
-    ``factors`` the families ``<design>_<factor>_low`` and ``_high`` at the screening's point, every other factor
-    at its study setting, ``CONFIRM_REPLICAS`` runs each from their own beds, the runs and beds at the ``contact``
-    settings."""
+    (docs/bed-dynamics.md, "Stage 3", rule 1): from the screening's study table (``screening``), the design's base
+    run with every factor at its study setting (``<design>_base``, the low level of all) and per factor in
+    ``factors`` its high level alone (``<design>_<factor>``), at the screening's point, ``CONFIRM_REPLICAS`` runs
+    each from their own beds; the runs at the ``contact`` settings, the beds settled at ``bed_contact`` (as stage
+    3's: ``tools/stage3_study.py``)."""
     design = screening["design"]
+    for factor in factors:
+        if factor not in design["factors"]:
+            raise ValueError(f"factor {factor!r}: not one of {design['name']}'s ({', '.join(design['factors'])})")
     out = {"name": f"confirm_{design['name']}",
            "description": f"{design['name']}: {', '.join(factors)} confirmed at new contact settings "
                           f"({', '.join(f'{k} = {v:g}' for k, v in contact.items())})",
            "duration": design.get("duration", screening["duration"]), "report": screening.get("report", "table"),
-           "replicas": CONFIRM_REPLICAS, "settings": {**screening.get("settings", {}), **contact}}
-    out["beds"] = copy.deepcopy(screening.get("beds", {}))
+           "replicas": CONFIRM_REPLICAS, "settings": dict(screening.get("settings", {}))}
+    out["beds"] = {name: {**bed, "set": {**bed.get("set", {}), **bed_contact}}
+                   for name, bed in copy.deepcopy(screening.get("beds", {})).items()}
+    levels = {"base": {}, **{factor: design["factors"][factor]["high"] for factor in factors}}
     out["families"] = {}
-    for factor in factors:
-        if factor not in design["factors"]:
-            raise ValueError(f"factor {factor!r}: not one of {design['name']}'s ({', '.join(design['factors'])})")
-        for level in ("low", "high"):
-            overrides = dict(design["factors"][factor][level])
-            bed = overrides.pop("bed", design.get("bed"))
-            family = {"case": design["case"], "set": {**design.get("set", {}), **overrides}}
-            if bed is not None:
-                family["bed"] = bed
-            out["families"][f"{design['name']}_{factor}_{level}"] = family
+    for label, level in levels.items():
+        overrides = dict(level)
+        bed = overrides.pop("bed", design.get("bed"))
+        family = {"case": design["case"], "set": {**design.get("set", {}), **contact, **overrides}}
+        if bed is not None:
+            family["bed"] = bed
+        out["families"][f"{design['name']}_{label}"] = family
+    used = {f.get("bed") for f in out["families"].values()}
+    out["beds"] = {name: bed for name, bed in out["beds"].items() if name in used}
     return out
