@@ -171,7 +171,16 @@ def test_the_contact_candidates_rule_chooses_the_cheapest_that_reproduces_the_pa
     verdicts = {f: c["verdict"] for f, c in result["candidates"].items()}
     assert verdicts == {"ar1_candidate_k3200": "agrees", "ar1_candidate_soft": "differs",
                         "ar1_candidate_mid": "open"}
+    # the open candidate may still agree and is the cheaper (250 against 340): nothing chosen yet
+    assert result["choice"] is None and result["why"].startswith("ar1_candidate_mid: open")
+    dearer = costed("ar1_candidate_mid", [5.0, 7.0, 9.0], [0.6, 0.75, 0.9], 400.0)  # open, but dearer
+    result = readings.contact_candidates(defaults + paper + like + unlike + dearer)["shapes"]["AR-1"]
     assert result["choice"] == "ar1_candidate_k3200" and result["candidates"]["ar1_candidate_k3200"]["cost"] == 340.0
+    # a candidate not yet run (its runs not started) holds the choice too: its cost is unknown
+    queued = [{**r, "status": "pending", "t95": None, "mixing_entropy_window": None, "cpu_seconds": None,
+               "simulated_seconds": 0.0} for r in costed("ar1_candidate_cfd", [7.0] * 3, [0.7] * 3, 300.0)]
+    result = readings.contact_candidates(defaults + paper + like + queued)["shapes"]["AR-1"]
+    assert result["choice"] is None and "ar1_candidate_cfd" in result["why"]
     both = readings.contact_candidates(defaults + paper + like + cheaper_like)["shapes"]["AR-1"]
     assert both["choice"] == "ar1_candidate_cfd"  # the cheaper of two agreeing
     assert readings.contact_candidates(defaults + paper + unlike)["shapes"]["AR-1"]["choice"] == "ar1_paper"

@@ -398,12 +398,14 @@ def contact_candidates(rows: list, velocity: float = 2.0) -> dict:
     differs). The settings the study's defaults move to (``choice``), where ``contact_settings`` reads "differ":
     of the agreeing candidates cheaper than the paper's settings (CPU seconds per simulated second), the cheapest;
     none such and every candidate differing or dearer, the paper's own; an agreeing candidate of unknown cost, or
-    the paper's cost unknown, decides nothing yet (None). Where it reads "agree", the defaults stand; "open",
+    the paper's cost unknown, decides nothing yet (None), nor does a candidate open or with runs on their way that
+    may be cheaper than the cheapest agreeing one (its cost unknown or lower). Where it reads "agree", the defaults stand; "open",
     none yet. "Agree within the spread" is not the equivalence test ``contact_settings`` asks of the defaults
     (within 10 % of the larger mean): at these spreads (SD 12 % of t95) that needs a dozen runs a side. Fixed on
     2026-12-07 before any candidate's run (issue 66, item 3)."""
     decided = contact_settings(rows, velocity)
-    rows = [r for r in t95_runs(rows) if row_ended(r)]
+    planned = t95_runs(rows)
+    rows = [r for r in planned if row_ended(r)]
     out = {"rule": "per shape at 2.0 Umf, each candidate's t95 (a run unmixed by its end counted at its end, a lower "
                    "bound) and mixing entropy averaged over 1-8 s against the paper's settings and the defaults' "
                    f"replicas, each by Welch's t ({margin_words()}); told apart from the paper's on either: differs; "
@@ -447,12 +449,23 @@ def contact_candidates(rows: list, velocity: float = 2.0) -> dict:
                 c["verdict"] = "open"
             entry["candidates"][family] = c
         agreeing = {f: c["cost"] for f, c in entry["candidates"].items() if c["verdict"] == "agrees"}
+        # a candidate whose runs are on their way, or that reads open, may still agree: it holds the choice where it
+        # may be the cheaper (its cost unknown, or below the cheapest agreeing one's)
+        waiting = sorted({r["family"] for r in planned if r["family"].startswith(defaults + CANDIDATE)
+                          and r.get("gas.u_over_umf") == velocity and not row_ended(r)}
+                         | {f for f, c in entry["candidates"].items() if c["verdict"] == "open"})
+        best = min((c for c in agreeing.values() if c is not None), default=None)
+        holding = [f for f in waiting if best is None or entry["candidates"].get(f, {}).get("cost") is None
+                   or entry["candidates"][f]["cost"] < best]
         if verdict == "agree":
             entry["choice"] = "defaults"
         elif verdict != "differ":
             entry["choice"] = None
         elif agreeing and (paper_cost is None or None in agreeing.values()):
             entry["choice"], entry["why"] = None, "an agreeing candidate's or the paper's cost is not known"
+        elif agreeing and holding:
+            entry["choice"], entry["why"] = None, (f"{', '.join(holding)}: open or with runs on their way, and may "
+                                                   "be the cheaper")
         elif any(cost < paper_cost for cost in agreeing.values()):
             entry["choice"] = min((f for f, cost in agreeing.items() if cost < paper_cost), key=agreeing.get)
         elif families and all(c["verdict"] in ("differs", "agrees") for c in entry["candidates"].values()):
