@@ -139,6 +139,10 @@ def study_schema() -> dict:
                              "fraction": {"type": "integer", "minimum": 1,
                                           "description": "p of a 2^(k-p) fraction with the standard generators"},
                              "centre_points": {"type": "integer", "minimum": 0, "maximum": 100, "default": 0},
+                             "foldover": {"anyOf": [{"const": "all"}, {"type": "array", "minItems": 1,
+                                                                       "items": {"type": "string"}}],
+                                          "description": "a second half of runs with these factors' signs "
+                                                         "reversed ('all': every factor): it de-aliases chains"},
                              "responses": {"type": "array", "minItems": 1, "items": {"type": "string"},
                                            "description": "table columns, or series columns at a time "
                                                           "('mixing_entropy@3.0')"},

@@ -70,16 +70,21 @@ class TwoLevelDesign:
     words: tuple
     resolution: int | None
     matrix: np.ndarray
+    folded: tuple = ()  # the letters a fold-over reversed in its second half of the runs (``fold_over``)
 
     @property
     def runs(self) -> int:
         return self.matrix.shape[0]
 
     def label(self) -> str:
-        k, p = len(self.letters), len(self.generators)
+        k = len(self.letters)
+        p = k - int(round(math.log2(self.runs)))
         kind = f"2^{k}" if p == 0 else f"2^({k}-{p})"
-        return f"{kind}, {self.runs} runs, " + ("full factorial" if self.resolution is None
-                                                 else f"resolution {ROMAN.get(self.resolution, self.resolution)}")
+        fold = "" if not self.folded else (" (a fold-over on all factors)" if len(self.folded) == k
+                                            else f" (a fold-over on {word_text(self.folded)})")
+        return f"{kind}, {self.runs} runs{fold}, " + (
+            "full factorial" if self.resolution is None
+            else f"resolution {ROMAN.get(self.resolution, self.resolution)}")
 
     def defining_relation(self) -> str:
         return "I" + "".join(f" = {word_text(w)}" for w in self.words) if self.words else "I (full factorial)"
@@ -197,6 +202,31 @@ def two_level(k: int, generators=(), *, names: dict | None = None, fraction: int
     resolution = min(len(w) for w in words) if words else None
     return TwoLevelDesign(letters, tuple(f"{g} = {word_text(b)}" for g, b in parsed), words, resolution, matrix)
 
+
+
+def fold_over(design: TwoLevelDesign, letters) -> TwoLevelDesign:
+    """``design`` with its fold-over on ``letters`` (Montgomery 2013, §8.6.2; Box, Hunter & Hunter 2005, §6.9): a
+    second half of runs, the first's with the signs of those factors reversed. The combined design's defining
+    relation keeps the words that hold an even number of the folded letters (the others change sign between the
+    halves and leave the relation). Folded on one factor, every two-factor interaction with it comes clear of the
+    others; folded on all, a resolution-III design becomes resolution IV. The halves are not treated as blocks: a
+    simulated run has no day-to-day drift (its replicas differ by their beds only)."""
+    folded = frozenset(letters)
+    if not folded or not folded <= set(design.letters):
+        raise DesignError(f"fold-over on {sorted(folded)}: one or more of the design's factors "
+                          f"({''.join(design.letters)})")
+    if design.folded:
+        raise DesignError("the design is folded over already: a second fold-over is a design of its own")
+    words = tuple(w for w in design.words if len(w & folded) % 2 == 0)
+    if len(words) == len(design.words):
+        raise DesignError(f"a fold-over on {word_text(folded)} repeats the design's own runs (every word of its "
+                          f"defining relation holds an even number of them): fold over other factors")
+    second = design.matrix.copy()
+    for letter in folded:
+        second[:, design.letters.index(letter)] *= -1.0
+    resolution = min(len(w) for w in words) if words else None
+    return TwoLevelDesign(design.letters, design.generators, words, resolution, np.vstack([design.matrix, second]),
+                          tuple(sorted(folded, key=LETTERS.index)))
 
 # --------------------------------------------------------------------------- analysis of a response
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ case-override sets, expanded into the study's runs (``designed_runs``), with the
     fraction = 2                           # 2^(k-2): the standard generators; or generators = ["E = ABC", ...]
     replicas = 2                           # each design point k times, replica k from its own bed (seed + k - 1)
     centre_points = 0                      # runs with every factor at its ``centre`` (each factor needs one)
+    foldover = ["packing"]                 # a second half with these factors' signs reversed ("all": every one)
     responses = ["onset_time", "kinetic_energy@3.0", "bed_expansion"]  # table columns, or series@time
     censored = ["onset_time"]              # responses a run may end without: its end time stands for them
     [design.factors.rolling]
@@ -20,13 +21,14 @@ case-override sets, expanded into the study's runs (``designed_runs``), with the
     high = {bed = "dense"}                 # a level may start its runs from another of the study's beds
 
 Factors are lettered A, B, C, ... in the file's order; the runs follow the design's standard order, every
-point's first replica before any second one (a campaign cut short has the whole design once)."""
+point's first replica before any second one (a campaign cut short has the whole design once). A fold-over adds its
+points after the design's own (``<name>_17``, ... for a 16-run fraction): a study extended by one keeps its runs."""
 from __future__ import annotations
 
 import re
 
 from .checks import did_you_mean, integer_in, priority_of, problem, replicas_of, seconds_of
-from .design import DesignError, two_level
+from .design import DesignError, fold_over, two_level
 
 FACTOR_KEYS = {"low", "high", "centre", "doc"}
 RESPONSE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(@[0-9]+(\.[0-9]*)?)?$")  # column, or series column@time
@@ -125,6 +127,19 @@ def designed_runs(spec, settings: dict, duration, replicas: int, entry, bed_name
     except DesignError as exc:
         problem(problems, "design", f"{len(names)} factors", str(exc))
         return [], None
+    foldover = spec.get("foldover")
+    if foldover is not None:
+        folded = names if foldover == "all" else foldover
+        if not isinstance(folded, list) or not folded or any(f not in names for f in folded):
+            problem(problems, "design.foldover", foldover, f"'all' or a list of the design's factors "
+                     f"({', '.join(names)}): a second half of runs with their signs reversed")
+            return [], None
+        try:
+            design = fold_over(design, [letters_of[f] for f in folded])
+        except DesignError as exc:
+            problem(problems, "design.foldover", foldover, str(exc))
+            return [], None
+        foldover = list(folded)
     if case_path is None or len(levels) != len(names) or any(
             not {"low", "high"} <= set(levels[f]) or centre_points and "centre" not in levels[f] for f in names):
         return [], None  # each problem is reported above
@@ -151,5 +166,5 @@ def designed_runs(spec, settings: dict, duration, replicas: int, entry, bed_name
                           for f in names},
               "aliases": {design.letters[j]: design.aliases(design.letters[j]) for j in range(len(names))},
               "replicas": design_replicas, "centre_points": centre_points, "responses": responses,
-              "censored": censored, "confidence": confidence}
+              "censored": censored, "confidence": confidence, **({"foldover": foldover} if foldover else {})}
     return runs, record

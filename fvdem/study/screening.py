@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .design import analyse, two_level
+from .design import analyse, fold_over, two_level
 from .records import RunState, state_of
 
 SCREENING_FILE = "screening.json"
@@ -61,6 +61,8 @@ def screening(out, design: dict, rows: list, series: dict) -> list:
     names = list(design["factors"])
     letters = {f: design["factors"][f]["letter"] for f in names}
     built = two_level(len(names), design["generators"])
+    if design.get("foldover"):
+        built = fold_over(built, [letters[f] for f in design["foldover"]])
     factor_of = {letters[f]: f for f in names}
     runs, results = [], {}
     planned = [r for r in rows if r.get("family") == design["name"] and r.get("status") != "not planned"]

@@ -23,7 +23,7 @@ STUDY_KEYS = {"name", "description", "duration", "replicas", "settings", "beds",
 BED_KEYS = {"case", "set"}  # a [beds.NAME] table's
 FAMILY_KEYS = BED_KEYS | {"bed", "duration", "replicas", "priority"}  # a [families.NAME] table's
 DESIGN_KEYS = FAMILY_KEYS | {"name", "factors", "generators", "fraction", "centre_points", "responses", "censored",
-                            "confidence"}  # the [design] table's (``fvdem.study.designed``)
+                            "confidence", "foldover"}  # the [design] table's (``fvdem.study.designed``)
 POINT_KEYS = ("duration", "replicas", "priority")  # what a [[points]] table sets ([[durations]]: duration)
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from fvdem.case import CaseError
 from fvdem.study import load_study
-from fvdem.study.design import STANDARD_GENERATORS, DesignError, analyse, model_terms, two_level
+from fvdem.study.design import STANDARD_GENERATORS, DesignError, analyse, fold_over, model_terms, two_level
 from fvdem.study.screening import response_value
 
 
@@ -93,6 +93,44 @@ def test_an_unreplicated_saturated_fraction_takes_lenths_pse_and_a_full_factoria
     assert a.error == "residual" and a.error_df == 1 and a.effects[0].estimate == pytest.approx(2.0)
 
 
+def test_a_fold_over_clears_what_the_textbook_says():
+    """Montgomery (2013, §8.6.2): the full fold-over of the 2^(7-4) resolution-III fraction is a 2^(7-3) of
+    resolution IV whose defining relation is the seven four-letter words of the original's; a fold-over on one
+    factor of the 2^(6-2) frees that factor's two-factor interactions (AD + EF into AD and EF), a fold-over on D of
+    the 2^(4-1) (I = ABCD) completes the full factorial; columns stay orthogonal and runs distinct."""
+    three = two_level(7, fraction=4)
+    full = fold_over(three, three.letters)
+    assert full.runs == 16 and full.resolution == 4 and full.label().startswith("2^(7-3), 16 runs")
+    assert sorted(map(sorted, full.words)) == sorted(sorted(w) for w in three.words if len(w) == 4)
+    one = fold_over(two_level(6, fraction=2), "D")
+    assert one.defining_relation() == "I = ABCE" and one.aliases("AD") == [] and one.aliases("EF") == []
+    assert "AD" in [t for t, _ in model_terms(one)] and "EF" in [t for t, _ in model_terms(one)]
+    assert fold_over(two_level(4, fraction=1), "D").resolution is None  # the full 2^4
+    for d in (full, one):
+        np.testing.assert_array_equal(d.matrix.T @ d.matrix, d.runs * np.eye(len(d.letters)))
+        assert len({tuple(r) for r in d.matrix}) == d.runs
+        np.testing.assert_array_equal(d.matrix[:d.runs // 2], (three if d is full else two_level(6, fraction=2)).matrix)
+    with pytest.raises(DesignError, match="repeats the design's own runs"):
+        fold_over(two_level(6, fraction=2), "BC")  # every word holds an even number of B and C
+    with pytest.raises(DesignError, match="folded over already"):
+        fold_over(one, "A")
+
+
+def test_a_fold_over_tells_apart_the_interactions_its_fraction_chained():
+    """y = 10 + 0.6 AD (effect 1.2) + N(0, 0.05), two replicas: the 2^(6-2) tells the chain AD + EF; folded on D
+    it tells AD (1.2) and leaves EF at nothing."""
+    rng = np.random.default_rng(5)
+    for design in (two_level(6, fraction=2), fold_over(two_level(6, fraction=2), "D")):
+        coded = np.vstack([design.matrix, design.matrix])
+        y = 10 + 0.6 * coded[:, 0] * coded[:, 3] + rng.normal(0, 0.05, len(coded))
+        effects = {e.term: e for e in analyse(design, coded, y).effects}
+        assert effects["AD"].decided() and effects["AD"].estimate == pytest.approx(1.2, abs=0.06)
+        if design.folded:  # EF its own term now, at nothing within the noise
+            assert effects["AD"].aliases == () and abs(effects["EF"].estimate) < 0.06
+        else:  # one chain: the fraction cannot say which of AD and EF it is
+            assert "EF" in effects["AD"].aliases and "EF" not in effects
+
+
 def test_a_response_reads_a_column_or_a_series_at_a_time_and_a_censored_one_takes_the_end():
     """A run that ended early by its stop condition holds its last value at later times."""
     series = {"time": np.array([0.0, 1.0, 2.0]), "mixing_entropy": np.array([0.1, 0.5, 0.7])}
@@ -165,6 +203,22 @@ def test_a_design_expands_into_runs_and_a_wrong_one_is_refused_with_its_key_path
     assert last.overrides["domain.gravity"] == [0.0, 0.0, -4.905] and last.overrides["time.dem_step"] == 2.5e-5
     assert study.runs[4].overrides["particles.insertion.seed"] == 2 and study.runs[4].priority == -1
     assert study.design["label"] == "2^(3-1), 4 runs, resolution III" and study.design["aliases"]["A"] == ["BC"]
+    # folded over on all factors: the fraction's runs first, under their names, then its mirror
+    path = _fall_study(tmp_path)
+    path.write_text(path.read_text().replace('censored = ["t95"]', 'censored = ["t95"]\nfoldover = "all"'))
+    folded = load_study(path, tmp_path / "folded")
+    assert [r.name for r in folded.runs][:4] == [f"fall_0{i}_r1" for i in (1, 2, 3, 4)]
+    assert [r.point for r in folded.runs[:4]] == [r.point for r in study.runs[:4]] and len(folded.runs) == 16
+    assert folded.runs[4].point == {f: -c for f, c in folded.runs[0].point.items()}
+    assert folded.design["label"] == "2^3, 8 runs (a fold-over on all factors), full factorial"
+    assert folded.design["foldover"] == ["gravity", "density", "step"]
+    for wrong, said in (('["hue"]', "'all' or a list of the design's factors"),
+                        ('["gravity", "density"]', "repeats the design's own runs")):
+        path.write_text(_fall_study(tmp_path).read_text().replace('censored = ["t95"]',
+                                                                  f'censored = ["t95"]\nfoldover = {wrong}'))
+        with pytest.raises(CaseError) as failure:
+            load_study(path, tmp_path / "folded")
+        assert any("design.foldover" in p and said in p for p in failure.value.problems), failure.value.problems
     bad = _fall_study(tmp_path, '[design.factors.colour]\nlow = {}\nhigh = {}\nhue = 3\n')
     text = bad.read_text().replace('generators = ["C = AB"]', 'generators = ["C = AB", "D = AQ"]').replace(
         '"t95"]\ncensored = ["t95"]', '"t95"]\ncensored = ["t99"]')

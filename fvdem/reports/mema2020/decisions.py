@@ -141,8 +141,8 @@ def screening_decision(record: dict) -> dict:
                 entry["decision"] = "cause"
             elif unread:
                 entry.update(decision="waits for the early signs", why=f"no effects yet on {', '.join(unread)}")
-            elif held:
-                entry.update(decision="fold-over first", chains=held)
+            elif held:  # rule 4: the design folded over on this factor (``foldover = [factor]``) tells its chains
+                entry.update(decision="fold-over first", chains=held, foldover=[factor])
             else:
                 entry["decision"] = "change"
                 changes[factor] = level["high"]
