@@ -41,7 +41,8 @@ with its checkpoint written (exit code 130).
 friction``, as the study's beds settle; or ``frictionless``, denser, its friction given back for the ramp: the
 screenings' "packing" factor), then the inlet stepped up from 0.4 to 2.0 Umf,exp from rest, each velocity held as
 above. Umf is fitted the same way; the output gives the prepared bed's packing (``prepared_solids_fraction``,
-``prepared_bed_height``) beside the packing it ends at. A settled bed's interlocking may hold the pressure drop
+``prepared_bed_height``) and the closure's uniform-bed Umf at it (``prepared_umf_closure_uniform_bed``: the end's
+``umf_closure_uniform_bed`` is of the fluidized bed the ramp ends in). A settled bed's interlocking may hold the pressure drop
 above W/A just past Umf (an overshoot): the fixed-bed branch ends at the first hold at 0.85 W/A, before it.
 
     python tools/validate_umf.py --rising --preparation frictionless --json
@@ -233,7 +234,10 @@ def ramp(spec, threads=None):
     record = json.loads(progress_file.read_text()) if resume else {"tag": tag}
     curve = record.get("curve", [])
     if not resume and rising:  # the prepared bed, before the gas moves it
-        record["prepared"] = {k: float(v) for k, v in packed_state(sim).items() if k in ("solids_fraction", "bed_top")}
+        prepared = packed_state(sim)
+        record["prepared"] = {k: float(prepared[k]) for k in ("solids_fraction", "bed_top")}
+        record["prepared"]["umf_closure_uniform_bed"] = float(uniform_bed_umf(
+            sim.bridge.model, 1.0 - prepared["solids_fraction"], prepared["axes"], case.particles.density))
     if resume:
         print(f"{tag}: resumed at t = {sim.time:.4f} s after {len(curve)} of {len(ratios)} holds", flush=True)
     else:  # from the first step on: a ramp stopped or killed inside its start resumes too
@@ -311,6 +315,7 @@ def ramp(spec, threads=None):
         "preparation": (o.get("preparation") or "friction") if rising else None,
         "prepared_solids_fraction": record["prepared"]["solids_fraction"] if rising else None,
         "prepared_bed_height": record["prepared"]["bed_top"] if rising else None,
+        "prepared_umf_closure_uniform_bed": record["prepared"].get("umf_closure_uniform_bed") if rising else None,
         "hold_seconds": o["hold"], "plateau_hold_seconds": plateau_hold,
         "column_height": float(case.domain.upper[2]), "inlet_ramp_seconds": start,
         "plateau_holds_touching_roof": sum(r for r, c in zip(roofed, curve)

@@ -180,6 +180,9 @@ def test_a_rising_ramp_steps_up_from_the_prepared_bed_and_a_frictionless_settlin
     dense = tool.ramp(dict(spec, preparation="frictionless"))
     assert dense["prepared_solids_fraction"] > loose["prepared_solids_fraction"] + 0.02
     assert dense["prepared_bed_height"] < loose["prepared_bed_height"]
+    # a denser bed holds its weight at less gas (Ergun: Umf grows about as voidage^3 / (1 - voidage)): the closure's
+    # uniform-bed Umf at the prepared packing falls with it
+    assert 0 < dense["prepared_umf_closure_uniform_bed"] < loose["prepared_umf_closure_uniform_bed"]
     for r in (loose, dense):
         velocity = [c["velocity"] for c in r["curve"]]
         assert velocity == sorted(velocity) and r["inlet_ramp_seconds"] == 0.0 and r["direction"] == "rising"
