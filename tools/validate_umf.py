@@ -361,6 +361,7 @@ def main(argv=None):
                         help="draw saved outputs of this tool (their last lines) on one chart, run nothing")
     args = parser.parse_args(argv)
     if args.combine:
+        Path(args.out).mkdir(parents=True, exist_ok=True)
         print(_combined_plot(Path(args.out) / "umf_compare.png", args.combine))
         return
     if args.preparation and not args.rising:
@@ -429,13 +430,17 @@ def _combined_plot(path, outputs, results=None):
         line, = ax.plot(u, [c["over_weight"] for c in r["curve"]], "o-", ms=3, label=label)
         if found:
             ax.axvline(r["umf_simulated"] / exp, color=line.get_color(), ls=":", lw=1)
-        ax.plot([r["umf_closure_uniform_bed"] / exp], [1.0], "v", color=line.get_color(), ms=8)
+        closure = (r.get("prepared_umf_closure_uniform_bed") if r.get("direction") == "rising"
+                   else r["umf_closure_uniform_bed"])  # a rising ramp's: at the packing it starts from
+        if closure is not None:
+            ax.plot([closure / exp], [1.0], "v", color=line.get_color(), ms=8)
     ax.axvline(1.0, color="k", lw=1.2, label="Umf measured (1.58 m/s AR-1, 1.7 m/s AR-4)")
     ax.axvspan(0.9, 1.1, color="k", alpha=0.07, label="within 10 %")
     ax.axhline(1.0, color="k", lw=0.5)
     ax.set_xlabel("U / Umf,experiment")
     ax.set_ylabel("bed pressure drop / (W/A)")
-    ax.set_title("ramps (defluidization unless said); triangles: the closure's own Umf at the ramp's packing",
+    ax.set_title("ramps (falling unless said rising); triangles: the closure's Umf at the packing\n"
+                 "(a falling ramp's end, a rising ramp's start)",
                  fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=6.5, loc="lower right")
