@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 
 from ...study.screening import MATTERS
+from .spread import sample_variance, satterthwaite
 
 FIXED = "2026-12-07"  # the date the screening rule was committed, before the screenings' runs
 CONFIDENCE = 0.95  # the intervals of rule 2 (the screening report's own ``confidence``)
@@ -192,9 +193,8 @@ def confirmation(low: list, high: list, screened: dict) -> dict:
         return out
     sides = (low, high)
     mean = [sum(x) / len(x) for x in sides]
-    terms = [sum((v - m) ** 2 for v in x) / (len(x) - 1) / len(x) for x, m in zip(sides, mean)]
-    below = sum(term * term / (len(x) - 1) for term, x in zip(terms, sides))
-    df = sum(terms) ** 2 / below if below > 0 else math.inf
+    terms = [sample_variance(x) / len(x) for x in sides]
+    df = satterthwaite(terms, [len(x) - 1 for x in sides]) or math.inf
     half = float(student.ppf(0.5 + CONFIDENCE / 2, df)) * math.sqrt(sum(terms)) if math.isfinite(df) else 0.0
     difference = mean[1] - mean[0]
     bounds = [difference - half, difference + half]

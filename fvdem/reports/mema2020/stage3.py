@@ -58,7 +58,7 @@ def _with_families(entry: dict, families: list) -> dict:
     return {**entry, "family": families[0] if len(families) == 1 else families}
 
 
-def compose_stage3(stage2: dict, changes: dict, header: str = "") -> dict:
+def compose_stage3(stage2: dict, changes: dict) -> dict:
     """Stage 3's study table from stage 2's (``stage2``: the parsed study file) and ``changes``: per shape that
     changes, ``{"set": run settings, "bed": bed settings}`` (the contact settings in both, a factor's run settings in
     ``set``, a bed preparation in ``bed``, ``gas.umf`` in ``set``). A shape absent from ``changes`` (or with both
