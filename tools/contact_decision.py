@@ -35,6 +35,16 @@ ROOT = Path(__file__).resolve().parents[1]
 ARCHIVES = tuple(ROOT / "docs" / "data" / name for name in ("mema2020", "contact_paper", "contact_candidates"))
 
 
+def study_archives(given, defaults, parser, option: str = "--archives") -> list:
+    """The archives a tool reads: those given, else the ``defaults`` that exist; any without a ``study.json`` is
+    refused (exit 2) with the option that named it."""
+    archives = list(given) if given else [a for a in defaults if (a / "study.json").exists()]
+    missing = [str(a) for a in archives if not (a / "study.json").exists()]
+    if missing:
+        parser.exit(2, f"{option}: {', '.join(missing)}: not a study archive (no study.json)\n")
+    return archives
+
+
 def table_rows(archive: Path, rebuild: bool = True) -> list:
     """The table rows of an archive (its report rebuilt in a scratch copy, else its committed table), the runs it
     plans, each with its ``gas.u_over_umf`` (``with_velocity``)."""
@@ -113,10 +123,7 @@ def main(argv=None) -> int:
     parser.add_argument("--plot", type=Path, metavar="FILE.png",
                         help="draw each setting's mixing entropy against time (mean, SD band) to this PNG")
     args = parser.parse_args(argv)
-    archives = args.archives or [a for a in ARCHIVES if (a / "study.json").exists()]
-    missing = [str(a) for a in archives if not (a / "study.json").exists()]
-    if missing:
-        parser.exit(2, f"--archives: {', '.join(missing)}: not a study archive (no study.json)\n")
+    archives = study_archives(args.archives, ARCHIVES, parser)
     if args.plot is not None and (args.plot.suffix != ".png" or not args.plot.parent.is_dir()):
         parser.exit(2, f"--plot {args.plot}: give a .png file in an existing folder\n")
     tables = {archive: table_rows(archive, rebuild=not args.quick) for archive in archives}

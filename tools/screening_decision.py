@@ -20,6 +20,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from contact_decision import study_archives  # tools/, beside this script
 from fvdem.reports.mema2020.decisions import screening_decision
 from fvdem.study import report
 from fvdem.study.screening import SCREENING_FILE
@@ -55,10 +56,7 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="read the archives' committed screening.json")
     parser.add_argument("--json", action="store_true", help="print only the JSON object")
     args = parser.parse_args(argv)
-    archives = args.archives or [a for a in ARCHIVES if (a / "study.json").exists()]
-    missing = [str(a) for a in archives if not (a / "study.json").exists()]
-    if missing:
-        parser.exit(2, f"--archives: {', '.join(missing)}: not a study archive (no study.json)\n")
+    archives = study_archives(args.archives, ARCHIVES, parser)
     out = {}
     for archive in archives:
         record = screening_record(archive, rebuild=not args.quick)

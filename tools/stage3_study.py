@@ -24,7 +24,7 @@ from pathlib import Path
 
 import tomli_w
 
-from contact_decision import ARCHIVES as CONTACT_ARCHIVES, table_rows  # tools/, beside this script
+from contact_decision import ARCHIVES as CONTACT_ARCHIVES, study_archives, table_rows  # tools/, beside this script
 from screening_decision import ARCHIVES as SCREENING_ARCHIVES, screening_record
 from fvdem.analysis.plots import read_timeseries
 from fvdem.case import load_case
@@ -121,11 +121,9 @@ def main(argv=None) -> int:
         except (KeyError, ValueError):
             parser.exit(2, f"--umf {item}: SHAPE=VALUE with SHAPE one of AR-1, AR-4 and VALUE in m/s "
                            "(e.g. AR-1=1.62)\n")
-    contact_archives = args.contact_archives or [a for a in CONTACT_ARCHIVES if (a / "study.json").exists()]
-    screenings = args.screenings or [a for a in SCREENING_ARCHIVES if (a / "study.json").exists()]
-    for archive in [*contact_archives, *screenings, *args.confirmations]:
-        if not (archive / "study.json").exists():
-            parser.exit(2, f"{archive}: not a study archive (no study.json)\n")
+    contact_archives = study_archives(args.contact_archives, CONTACT_ARCHIVES, parser, "--contact-archives")
+    screenings = study_archives(args.screenings, SCREENING_ARCHIVES, parser, "--screenings")
+    study_archives(args.confirmations, (), parser, "--confirmations")
     stage2 = tomllib.loads(args.stage2.read_text())
     rows = [r for a in contact_archives for r in table_rows(a, rebuild=not args.quick)]
     candidates = contact_candidates(rows)["shapes"]
