@@ -58,19 +58,26 @@ def _on_the_way(counted, base: str, v, kind: str) -> int:
                and (kind != T95 or r.get("t95") is None) for r in counted)
 
 
-def plan_points(rows, findings, study: str | None = None) -> str:
+def plan_tables(rows, findings, addable=()) -> tuple[dict, list, list]:
     """The ``[[points]]`` tables that would add the replicas the open findings' plans ask (``findings.json``'s
     ``plans``, ``replicas_to_tell``: how many of each family in all would tell a difference if the means and
-    spread stay), as TOML to append to the study file: per family and velocity, the most any finding asks, less
-    the runs counted so far and those the study already has on their way (``_on_the_way``), added to the study's
-    replicas there; each replica of the cheapest study family that counts (``_plan_family``: "<family>_t95" for
-    a t95 finding, "<family>_expansion" for the bed expansion, in the taller column where the study runs one).
-    Each table says which findings ask it and what it costs at its point's runs so far; findings open without a
-    plan (runs to lengthen, or more replicas than ``MAX_PLANNED``) are listed by name."""
+    spread stay), as data: ``{(family, U/Umf): {"from", "replicas", "cost", "why"}}`` per family and velocity, the
+    most any finding asks, less the runs counted so far and those the study already has on their way
+    (``_on_the_way``), added to the study's replicas there (``from``); each replica of the cheapest study family
+    that counts (``_plan_family``: "<family>_t95" for a t95 finding, "<family>_expansion" for the bed expansion, in
+    the taller column where the study runs one), ``cost`` a replica's CPU seconds at its point's runs so far. Also
+    the findings' lines already on their way (``queued``) and the open findings without a plan (``lines``).
+    ``addable``: replica series ("<family>_t95", "<family>_expansion") the study file does not hold yet that may be
+    added to it, counted as present with no runs wherever their base family runs."""
     present = {}
     for r in rows:
         key = (r["family"], r.get("gas.u_over_umf"))
         present[key] = max(present.get(key, 0) + 1, r.get("replica") or 0)
+    for name in addable:
+        base = name[:-len(T95_ONLY)] if name.endswith(T95_ONLY) else name[:-len(EXPANSION)]
+        for family, v in list(present):
+            if family == base:
+                present.setdefault((name, v), 0)
     counted = {kind: _counted_as(rows, kind) for kind in (T95, EXPANSION_KIND, WHOLE)}
     tables, queued, lines = {}, [], []
     for finding in findings:
@@ -97,6 +104,14 @@ def plan_points(rows, findings, study: str | None = None) -> str:
                 table["why"].append(said + ("" if (family, v) in present else
                                             f"; {family} does not run at {v:g} Umf in the study: an [[exclude]] "
                                             "may drop it"))
+    return tables, queued, lines
+
+
+def plan_points(rows, findings, study: str | None = None) -> str:
+    """The ``[[points]]`` tables of ``plan_tables`` as TOML to append to the study file (``plan.toml``). Each table
+    says which findings ask it and what it costs at its point's runs so far; findings open without a plan (runs to
+    lengthen, or more replicas than ``MAX_PLANNED``) are listed by name."""
+    tables, queued, lines = plan_tables(rows, findings)
     hours = core_hours([t["replicas"] for t in tables.values()], [t["from"] for t in tables.values()],
                         [t["cost"] for t in tables.values()])
     head = [f"# {study or 'study'}: the replicas that would decide the open findings if the means and spread stay",

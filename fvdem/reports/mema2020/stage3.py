@@ -21,6 +21,8 @@ from __future__ import annotations
 import copy
 from pathlib import PurePosixPath
 
+import tomli_w
+
 from .families import EXPANSION, T95_ONLY
 
 CONTACT_KEYS = ("contact.normal_stiffness", "time.dem_step", "gas.cfd_step")  # the contact settings' choice
@@ -146,3 +148,100 @@ def confirmation_study(screening: dict, factors: list, contact: dict, bed_contac
     used = {f.get("bed") for f in out["families"].values()}
     out["beds"] = {name: bed for name, bed in out["beds"].items() if name in used}
     return out
+
+
+ROUND_HOURS = 20.0  # rule 3: a round adds every plan table whose added replicas cost at most this many core-hours
+ROUND_MARK = "# stage 3, round "  # the comment line that opens each round appended to the study file
+
+
+def round_tables(tables: dict, hours: float = ROUND_HOURS) -> tuple[list, list]:
+    """A round of rule 3 (docs/bed-dynamics.md, "Stage 3"): of the plan's tables (``plan.plan_tables``), each whose
+    added replicas cost at most ``hours`` core-hours at its point's runs so far, cheapest first; and apart, each
+    other with why it stays (more than ``hours``: its finding stays open, said with the plan's numbers; or its
+    cost unknown: no run of its point has ended). Each as ``{"family", "u_over_umf", "from", "replicas", "more",
+    "core_hours", "why"}``."""
+    chosen, left = [], []
+    for (family, v), table in tables.items():
+        more = table["replicas"] - table["from"]
+        cost = table["cost"]
+        entry = {"family": family, "u_over_umf": v, "from": table["from"], "replicas": table["replicas"],
+                 "more": more, "core_hours": None if cost is None else more * cost / 3600.0,
+                 "why": list(table["why"])}
+        if entry["core_hours"] is None:
+            left.append({**entry, "left": "no run of its point has ended: its cost is unknown"})
+        elif entry["core_hours"] > hours:
+            left.append({**entry, "left": f"{entry['core_hours']:.3g} core-hours, more than a round's {hours:g}"})
+        else:
+            chosen.append(entry)
+    chosen.sort(key=lambda e: (e["core_hours"], e["family"], e["u_over_umf"]))
+    left.sort(key=lambda e: (e["family"], e["u_over_umf"]))
+    return chosen, left
+
+
+def series_base(name: str) -> str | None:
+    """The family a replica series "<family>_t95" or "<family>_expansion" counts as, or None for another name."""
+    for suffix in (T95_ONLY, EXPANSION):
+        if name.endswith(suffix):
+            return name[:-len(suffix)]
+    return None
+
+
+def addable_series(stage2: dict, stage3: dict) -> list:
+    """The replica series of stage 2 that stage 3's file lacks while it runs their base family (a changed shape's:
+    ``compose_stage3`` leaves them to the rounds)."""
+    return sorted(name for name in stage2.get("families", {})
+                  if series_base(name) in stage3.get("families", {}) and name not in stage3["families"])
+
+
+def _delta(old: dict, new: dict) -> dict:
+    """The settings ``new`` sets otherwise than ``old``."""
+    return {k: v for k, v in new.items() if old.get(k, object()) != v}
+
+
+def series_tables(stage2: dict, stage3: dict, name: str, velocities: list) -> dict:
+    """What stage 3's file needs to run stage 2's replica series ``name`` at ``velocities`` alone: its family with
+    the changes stage 3 made to its base family's settings (``set``) and beds (renamed ``NEW_BED`` with the changes
+    made to the base's bed), that bed where the file lacks it, stage 2's ``[[durations]]`` naming it, and an
+    ``[[exclude]]`` of the file's other velocities (``{"families": {...}, "beds": {...}, "durations": [...],
+    "exclude": [...]}``). Its replicas come from the round's ``[[points]]``."""
+    base = series_base(name)
+    old_base, new_base = stage2["families"][base], stage3["families"][base]
+    family = copy.deepcopy(stage2["families"][name])
+    family["set"] = {**family.get("set", {}), **_delta(old_base.get("set", {}), new_base.get("set", {}))}
+    family.pop("replicas", None)
+    beds = {}
+    old_bed, new_bed = old_base.get("bed"), new_base.get("bed")
+    if family.get("bed") is not None and new_bed != old_bed:  # the shape's beds renamed: the series' too
+        change = _delta(stage2["beds"][old_bed].get("set", {}), stage3["beds"][new_bed].get("set", {}))
+        renamed = family["bed"] + NEW_BED
+        if renamed not in stage3.get("beds", {}):
+            bed = copy.deepcopy(stage2["beds"][family["bed"]])
+            beds[renamed] = {**bed, "set": {**bed.get("set", {}), **change}}
+        family["bed"] = renamed
+    durations = [_with_families(copy.deepcopy(d), [name]) for d in stage2.get("durations", [])
+                 if name in _families(d)]
+    axis = list(stage3.get("axes", {}).get("gas.u_over_umf", []))
+    others = [v for v in axis if v not in velocities]
+    exclude = [{"family": name, "gas.u_over_umf": others}] if others else []
+    return {"families": {name: family}, "beds": beds, "durations": durations, "exclude": exclude}
+
+
+def round_toml(chosen: list, stage2: dict, stage3: dict, number: int, said: list) -> str:
+    """Round ``number``'s text to append to stage 3's file: a head (``ROUND_MARK``, then ``said``'s lines), the
+    tables a replica series new to the file needs (``series_tables``, at the velocities the round asks of it), and
+    each chosen table (``round_tables``) as a ``[[points]]`` table with the findings that ask it and its cost."""
+    lines = ["", f"{ROUND_MARK}{number}"] + [f"# {line}" for line in said]
+    new = {}
+    for entry in chosen:
+        if entry["family"] not in stage3.get("families", {}):
+            new.setdefault(entry["family"], []).append(entry["u_over_umf"])
+    for name, velocities in sorted(new.items()):
+        tables = series_tables(stage2, stage3, name, velocities)
+        lines.append(f"# {name}: stage 2's replica series of {series_base(name)}, at this round's points alone")
+        lines.append(tomli_w.dumps({k: v for k, v in tables.items() if v}).rstrip("\n"))
+    for entry in chosen:
+        lines += [""] + [f"# {why}" for why in entry["why"]]
+        lines += [f"# {entry['more']} more, about {entry['core_hours']:.3g} core-hours", "[[points]]",
+                  f'family = "{entry["family"]}"', f'"gas.u_over_umf" = {float(entry["u_over_umf"])!r}',
+                  f"replicas = {entry['replicas']}  # {entry['from']} in the study so far"]
+    return "\n".join(lines) + "\n"
