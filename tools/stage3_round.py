@@ -9,10 +9,12 @@ A changed shape starts without stage 2's replica series (``<family>_t95``, ``<fa
 one brings it back from stage 2's file, with stage 3's changes to its base family and beds, at the round's points
 alone; its first replicas are priced at the base family's runs (a t95 run at a whole run's cost, an expansion run at
 its 5 s share of one). A table whose cost is unknown (no run of its point has ended) or above the limit is left out
-and said so; a finding it alone would decide stays open. Nothing the study file holds is changed: the round is
-appended, and the file is refused (exit 2, nothing written) unless the study engine expands it with every run it
-planned before and each table's replicas. A table the file already plans is not added again, so a second call
-before the archive has the round's runs adds nothing. The last line is one JSON object: ``round``, ``chosen``,
+and said so; a finding it alone would decide stays open. The round is appended; the one thing of the file it changes
+is a series' own ``[[exclude]]`` that an earlier round wrote, narrowed where a later round asks the series at
+another velocity. The file is refused (exit 2, nothing written) unless the study engine expands it with every run
+it planned before and each table's replicas. The archive must hold every run the file plans (archived after the
+last round), else the tool waits: a plan that does not see a round's runs would ask them again. A table the file
+already plans is not added again. The last line is one JSON object: ``round``, ``chosen``,
 ``left``, ``written``, and ``waiting``: what it needs that is not there yet (stage 3's file or archive; then it
 writes nothing and exits 0). ``--quick`` reads the archive's committed table and findings (else its report is
 rebuilt in a scratch copy).
@@ -30,7 +32,8 @@ from pathlib import Path
 from contact_decision import study_archives, with_velocity  # tools/, beside this script
 from fvdem.reports.mema2020.families import row_ended
 from fvdem.reports.mema2020.plan import plan_tables
-from fvdem.reports.mema2020.stage3 import ROUND_HOURS, ROUND_MARK, addable_series, round_tables, round_toml
+from fvdem.reports.mema2020.stage3 import (ROUND_HOURS, ROUND_MARK, addable_series, narrow_exclude, round_tables,
+                                           round_toml)
 from fvdem.errors import CaseError
 from fvdem.study import report
 from fvdem.study.sweep import study_from_table
@@ -57,11 +60,11 @@ def report_records(archive: Path, rebuild: bool = True) -> tuple[list, list]:
         return read(copy)
 
 
-def planned(text: str, path: Path, scratch: Path) -> Counter:
+def planned(text: str, path: Path, scratch: Path) -> tuple[Counter, set]:
     """How many runs a study file's ``text`` (at ``path``: its case paths are relative to it) plans per (family,
-    U/Umf), as the study engine expands it."""
+    U/Umf), as the study engine expands it, and their names."""
     study = study_from_table(tomllib.loads(text), path, scratch)
-    return Counter((r.family, r.point.get("gas.u_over_umf")) for r in study.runs)
+    return Counter((r.family, r.point.get("gas.u_over_umf")) for r in study.runs), {r.name for r in study.runs}
 
 
 def main(argv=None) -> int:
@@ -98,10 +101,18 @@ def main(argv=None) -> int:
     text = args.study.read_text()
     stage3, stage2 = tomllib.loads(text), tomllib.loads(args.stage2.read_text())
     rows, findings = report_records(archive, rebuild=not args.quick)
-    tables, _, _ = plan_tables(rows, findings, addable_series(stage2, stage3))
-    chosen, left = round_tables(tables, args.hours)
     with tempfile.TemporaryDirectory() as scratch:
-        before = planned(text, args.study, Path(scratch) / "before")
+        before, names = planned(text, args.study, Path(scratch) / "before")
+        behind = names - {r["name"] for r in rows}
+        if behind:  # its plan would not see the runs the file's last round added: they would be asked again
+            waiting = [f"{archive}: archived before the study file's last round ({len(behind)} of its runs not in "
+                       "the archive's table): archive the study again (fvdem study DIR --archive)"]
+            if not args.json:
+                print(f"waits: {waiting[0]}")
+            print(json.dumps({"round": None, "waiting": waiting, "chosen": [], "left": [], "written": []}))
+            return 0
+        tables, _, _ = plan_tables(rows, findings, addable_series(stage2, stage3))
+        chosen, left = round_tables(tables, args.hours)
         chosen = [e for e in chosen if before[(e["family"], e["u_over_umf"])] < e["replicas"]]
         number = text.count(f"\n{ROUND_MARK}") + 1
         ended = sum(row_ended(r) for r in rows)
@@ -112,15 +123,19 @@ def main(argv=None) -> int:
         said += [f"left: {e['more']} more of {e['family']} at {e['u_over_umf']:g} Umf ({e['left']})" for e in left]
         written = []
         if chosen and not args.dry_run:
-            new = text.rstrip("\n") + "\n" + round_toml(chosen, stage2, stage3, number, said)
+            new = text
+            for e in chosen:  # a series an earlier round brought back, asked at a velocity it excluded
+                if e["family"] in stage3["families"] and before[(e["family"], e["u_over_umf"])] == 0:
+                    new = narrow_exclude(new, e["family"], [e["u_over_umf"]]) or new
+            new = new.rstrip("\n") + "\n" + round_toml(chosen, stage2, stage3, number, said)
             try:
-                after = planned(new, args.study, Path(scratch) / "after")
+                after, _ = planned(new, args.study, Path(scratch) / "after")
             except (CaseError, tomllib.TOMLDecodeError) as exc:
                 parser.exit(2, f"--study {args.study}: the round would make a file the study engine refuses "
                                f"({exc}); nothing written\n")
             lost = [key for key, n in before.items() if after[key] < n]
             short = [f"{e['family']} at {e['u_over_umf']:g} Umf ({after[(e['family'], e['u_over_umf'])]} of "
-                     f"{e['replicas']}: an [[exclude]] of the study file drops it; remove that velocity from it, no "
+                     f"{e['replicas']}: an [[exclude]] no round wrote drops it; remove that velocity from it, no "
                      "run is lost)" for e in chosen if after[(e["family"], e["u_over_umf"])] < e["replicas"]]
             if lost or short:
                 parser.exit(2, f"--study {args.study}: the round would "

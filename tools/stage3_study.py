@@ -22,7 +22,6 @@ import json
 import tomllib
 from pathlib import Path
 
-import tomli_w
 
 from contact_decision import ARCHIVES as CONTACT_ARCHIVES, study_archives, table_rows  # tools/, beside this script
 from screening_decision import ARCHIVES as SCREENING_ARCHIVES, screening_record
@@ -31,7 +30,7 @@ from fvdem.case import load_case
 from fvdem.reports.mema2020.decisions import SCREENINGS, confirmation, screening_decision
 from fvdem.reports.mema2020.readings import SHAPES, contact_candidates
 from fvdem.reports.mema2020.stage3 import (CONFIRM_REPLICAS, CONTACT_KEYS, EXPERIMENT_UMF, compose_stage3,
-                                           confirmation_study, shape_of_case, umf_reference)
+                                           confirmation_study, shape_of_case, study_toml, umf_reference)
 from fvdem.study.records import RunState, folder_case, state_of
 from fvdem.study.screening import response_value
 
@@ -167,7 +166,7 @@ def main(argv=None) -> int:
                     path.write_text(_header([f"{shape}: the screening's changes confirmed at the new contact "
                                              "settings (docs/bed-dynamics.md, Stage 3, rule 1), written by "
                                              "tools/stage3_study.py", f"  fvdem study {path.name} --out "
-                                             f"~/fvdem-runs/{study['name']} --workers 1"]) + tomli_w.dumps(study))
+                                             f"~/fvdem-runs/{study['name']} --workers 1"]) + study_toml(study))
                     written.append(str(path))
                 more = [f for f, v in verdicts.items() if v["verdict"] == "add runs"]
                 most = max((max(v["runs"]) for v in verdicts.values()), default=0)
@@ -201,7 +200,7 @@ def main(argv=None) -> int:
         _write(args.out, _header(["Stage 3 of Mema et al.'s study (issue 66): stage 2's points at the decided "
                                   "settings, composed by tools/stage3_study.py (docs/bed-dynamics.md, Stage 3)", *notes,
                                   f"  fvdem study {args.out.name} --out ~/fvdem-runs/mema2020_stage3 --workers 2 "
-                                  "--adopt docs/data/mema2020"]) + tomli_w.dumps(study), written, parser)
+                                  "--adopt docs/data/mema2020"]) + study_toml(study), written, parser)
     result = {"ready": not waiting, "waiting": waiting, "shapes": out, "written": written}
     if not args.json:
         for line in waiting:

@@ -10,12 +10,10 @@ import tomllib
 from collections import Counter
 
 import pytest
-import tomli_w
 
-from fvdem.reports.mema2020.plan import plan_points, plan_tables
-from fvdem.reports.mema2020.rules import EXPANSION_SECONDS, replica_cost
-from fvdem.reports.mema2020.stage3 import (ROUND_HOURS, addable_series, compose_stage3, round_tables, round_toml,
-                                           series_tables)
+from fvdem.reports.mema2020.plan import EXPANSION_SECONDS, plan_points, plan_tables
+from fvdem.reports.mema2020.stage3 import (ROUND_HOURS, addable_series, compose_stage3, narrow_exclude, round_tables,
+                                           round_toml, series_tables, study_toml)
 from fvdem.study import load_study
 from paths import ROOT, TOOLS
 
@@ -48,20 +46,37 @@ def test_a_round_takes_each_table_up_to_20_core_hours_cheapest_first():
         "d": "22 core-hours, more than a round's 20", "e": "no run of its point has ended: its cost is unknown"}
 
 
+def _finding(kind: str, family: str, v: float, replicas: int, now: int, cost) -> dict:
+    """An open finding whose plan asks ``replicas`` of ``family`` at ``v`` in all (``now`` so far)."""
+    return {"finding": f"{kind} finding", "verdict": "open", "plans": [{"kind": kind, "core_hours": None, "runs": [
+        {"family": family, "u_over_umf": v, "replicas": replicas, "now": now, "cpu_seconds": cost}]}]}
+
+
+def _row(name: str, family: str, v: float, cpu: float, seconds: float, status: str = "finished") -> dict:
+    return {"name": name, "family": family, "gas.u_over_umf": v, "status": status, "cpu_seconds": cpu,
+            "simulated_seconds": seconds}
+
+
 def test_a_series_without_runs_is_priced_at_its_base_familys_whole_runs():
-    """An expansion run at its 5 s share of a whole run (CPU seconds per simulated second times 5 s); a series'
-    own ended runs where it has some; a t95 run at a whole run's cost where no run was cut at t95."""
-    rows = [{"family": "ar4_mp", "gas.u_over_umf": 1.6, "status": "finished", "cpu_seconds": 8000.0,
-             "simulated_seconds": 20.0},
-            {"family": "ar4_mp", "gas.u_over_umf": 1.6, "status": "finished", "cpu_seconds": 6000.0,
-             "simulated_seconds": 20.0}]
+    """Stage 3, rule 3: a series the study may add (``addable``) but has no run of at a point is priced at its base
+    family's whole runs there (an expansion run at its 5 s share, a t95 run at a whole run's cost), and an
+    expansion plan whose replicas are whole runs (no series there) at a whole run's cost; a series' own runs price
+    it where it has some."""
+    rows = [_row("ar4_mp_r1", "ar4_mp", 1.6, 8000.0, 20.0), _row("ar4_mp_r2", "ar4_mp", 1.6, 6000.0, 20.0),
+            _row("ar4_mp_r3", "ar4_mp", 1.7, 5000.0, 16.0)]
     assert EXPANSION_SECONDS == 5.0
-    assert replica_cost(rows, "ar4_mp", 1.6, "ar4_mp_expansion") == pytest.approx(5.0 * 350.0)
-    assert replica_cost(rows, "ar4_mp", 1.6) == pytest.approx(7000.0)
-    assert replica_cost(rows, "ar4_mp", 1.7, "ar4_mp_expansion") is None  # no run there at all
-    own = rows + [{"family": "ar4_mp", "column": "ar4_mp_expansion", "gas.u_over_umf": 1.6, "status": "finished",
-                   "cpu_seconds": 1500.0, "simulated_seconds": 5.0}]
-    assert replica_cost(own, "ar4_mp", 1.6, "ar4_mp_expansion") == 1500.0
+    findings = [_finding("expansion", "ar4_mp", 1.6, 6, 2, None), _finding("t95", "ar4_mp", 1.6, 5, 2, 7000.0)]
+    tables, _, _ = plan_tables(rows, findings, ["ar4_mp_expansion", "ar4_mp_t95"])
+    assert tables[("ar4_mp_expansion", 1.6)]["cost"] == pytest.approx(5.0 * 350.0)
+    assert tables[("ar4_mp_t95", 1.6)]["cost"] == pytest.approx(7000.0)
+    assert {k: t["from"] for k, t in tables.items()} == {("ar4_mp_expansion", 1.6): 0, ("ar4_mp_t95", 1.6): 0}
+    # without the series (not addable, none in the study): whole runs, priced as whole runs
+    tables, _, _ = plan_tables(rows, [_finding("expansion", "ar4_mp", 1.7, 3, 1, None)])
+    assert tables[("ar4_mp", 1.7)]["cost"] == 5000.0
+    # the series' own ended runs price it
+    own = rows + [_row("ar4_mp_expansion_r1", "ar4_mp_expansion", 1.6, 1500.0, 5.0)]
+    tables, _, _ = plan_tables(own, [_finding("expansion", "ar4_mp", 1.6, 6, 3, 1500.0)], ["ar4_mp_expansion"])
+    assert tables[("ar4_mp_expansion", 1.6)]["cost"] == 1500.0 and tables[("ar4_mp_expansion", 1.6)]["from"] == 1
 
 
 @pytest.fixture(scope="module")
@@ -74,17 +89,18 @@ def composed(tmp_path_factory):
     stage2 = tomllib.loads(STAGE2.read_text())
     stage3 = compose_stage3(stage2, {"AR-1": {"set": {**CONTACT, "gas.inlet_ramp": 0.0}, "bed": BED}})
     path = root / "studies" / "mema2020_stage3.toml"
-    path.write_text("# stage 3\n" + tomli_w.dumps(stage3))
+    path.write_text("# stage 3\n" + study_toml(stage3))
     return root, path, stage2, stage3
 
 
 def test_a_round_brings_a_changed_shapes_replica_series_back_at_its_points_alone(composed, tmp_path):
     root, path, stage2, stage3 = composed
-    assert addable_series(stage2, stage3) == ["ar1_expansion", "ar1_t95", "ar1_tall_t95"]
-    chosen = [{"family": "ar1_t95", "u_over_umf": 2.0, "from": 0, "replicas": 6, "more": 6, "core_hours": 3.0,
-               "why": ["a finding: 8 of ar1 at 2 Umf in all (now 2)"]},
-              {"family": "ar1", "u_over_umf": 1.6, "from": 2, "replicas": 3, "more": 1, "core_hours": 1.5,
-               "why": ["another: 3 of ar1 at 1.6 Umf in all (now 2)"]}]
+    assert addable_series(stage2, stage3) == ["ar1_expansion", "ar1_t95", "ar1_tall_t95"]  # AR-4 unchanged: none
+    entry = lambda family, v, now, n: {"family": family, "u_over_umf": v, "from": now, "replicas": n,
+                                       "more": n - now, "core_hours": 1.0, "why": [f"a finding asks {family}"]}
+    # two series sharing stage 2's bed ar1_t95 in one round; a t95 series where its base runs 16 s (1.7 Umf)
+    chosen = [entry("ar1_t95", 2.0, 0, 6), entry("ar1_t95", 1.7, 0, 4), entry("ar1_tall_t95", 2.9, 0, 3),
+              entry("ar1", 1.6, 2, 3)]
     text = path.read_text() + round_toml(chosen, stage2, stage3, 1, ["round one"])
     trial = path.with_name("round.toml")
     trial.write_text(text)
@@ -92,30 +108,48 @@ def test_a_round_brings_a_changed_shapes_replica_series_back_at_its_points_alone
     after = load_study(trial, tmp_path / "after")
     count = lambda study: Counter((r.family, r.point["gas.u_over_umf"]) for r in study.runs)
     added = count(after) - count(before)
-    assert added == Counter({("ar1_t95", 2.0): 6, ("ar1", 1.6): 1})  # nothing else, nothing lost
-    assert not count(before) - count(after)
+    assert added == Counter({("ar1_t95", 2.0): 6, ("ar1_t95", 1.7): 4, ("ar1_tall_t95", 2.9): 3, ("ar1", 1.6): 1})
+    assert not count(before) - count(after)  # nothing lost
     runs = {r.name: r for r in after.runs}
     beds = {b.name: b for b in after.beds}
-    series = [r for r in after.runs if r.family == "ar1_t95"]
-    base = next(r for r in after.runs if r.family == "ar1" and r.point["gas.u_over_umf"] == 2.0)
-    for r in series:  # the base family's new settings, the series' own stop, beds of its own seeds renamed
+    base = {(r.family, r.point["gas.u_over_umf"]): r for r in after.runs}
+    for r in after.runs:
+        if not (r.family.startswith("ar1") and r.family.endswith("_t95")):
+            continue
+        twin = base[(r.family[:-4], r.point["gas.u_over_umf"])]  # the base family's run at its point
+        # the base family's new settings and run length, the series' own stop, beds of its own seeds renamed
         assert {k: r.overrides[k] for k in CONTACT} == CONTACT and r.overrides["gas.inlet_ramp"] == 0.0
-        assert r.overrides["time.stop_after_mixed"] == 0.0 and r.overrides["gas.umf"] == base.overrides["gas.umf"]
-        assert r.bed.startswith("ar1_t95_stage3") and r.duration == base.duration and r.priority == -1
-        assert {k: beds[r.bed].overrides[k] for k in BED} == BED
+        assert r.overrides["time.stop_after_mixed"] == 0.0 and r.overrides["gas.umf"] == twin.overrides["gas.umf"]
+        assert r.duration == twin.duration and r.priority == -1
+        assert r.bed.startswith("ar1_t95_stage3") and {k: beds[r.bed].overrides[k] for k in BED} == BED
         seed = beds[r.bed].overrides["particles.insertion.seed"]  # stage 2's series seeds: from 201
-        assert seed >= 201 and seed != beds[base.bed].overrides.get("particles.insertion.seed")
+        assert seed >= 201 and seed != beds[twin.bed].overrides.get("particles.insertion.seed")
+        if r.family == "ar1_tall_t95":
+            assert r.overrides["domain.upper"] == [0.15, 0.15, 2.1]
+    assert {r.duration for r in after.runs if r.family == "ar1_t95" and r.point["gas.u_over_umf"] == 1.7} == {16.0}
     assert {n for n in runs if n.startswith("ar4")} == {r.name for r in before.runs if r.name.startswith("ar4")}
-    # the expansion series keeps stage 2's 5 s ([[durations]]); the tall t95 series its 2.1 m column
+    # the expansion series: its own 5 s decides, after its base family's [[durations]]
     tables = series_tables(stage2, stage3, "ar1_expansion", [1.6])
-    assert tables["durations"] == [{"family": "ar1_expansion", "duration": 5.0}]
-    assert tables["exclude"] == [{"family": "ar1_expansion", "gas.u_over_umf": [1.7, 2.0, 2.3, 2.6, 2.9]}]
-    tall = series_tables(stage2, stage3, "ar1_tall_t95", [2.9])["families"]["ar1_tall_t95"]
-    assert tall["set"]["domain.upper"] == [0.15, 0.15, 2.1] and tall["set"]["contact.normal_stiffness"] == 3200.0
+    assert tables["durations"][-1] == {"family": "ar1_expansion", "duration": 5.0}
+    assert tables["exclude"] == [1.7, 2.0, 2.3, 2.6, 2.9]
+    # a later round narrows the exclusion a round wrote; one written otherwise is not the rounds' to change
+    narrowed = narrow_exclude(text, "ar1_t95", [2.3])
+    assert narrowed.count('"gas.u_over_umf" = [1.6, 2.6, 2.9]') == 1
+    assert narrow_exclude(text, "ar1_tall", [1.6]) is None
 
 
-def test_the_round_tool_appends_once_and_refuses_a_round_an_exclude_would_drop(composed, tmp_path, monkeypatch,
-                                                                               capsys):
+def _archived(study, done=()) -> list:
+    """The rows an archive of ``study`` (a loaded study) would hold: every run it plans, those of ``done``'s
+    (family, U/Umf) ended at 3600 CPU s over 8 simulated s, the others pending."""
+    return [{"name": r.name, "family": r.family, "gas.u_over_umf": r.point["gas.u_over_umf"],
+             **({"status": "finished", "cpu_seconds": 3600.0, "simulated_seconds": 8.0}
+                if (r.family, r.point["gas.u_over_umf"]) in done else {"status": "pending"})} for r in study.runs]
+
+
+def test_the_round_tool_appends_a_round_once_and_waits_for_its_archive(composed, tmp_path, monkeypatch, capsys):
+    """The tool on the findings' plans as data: a t95 plan for AR-1 at 2.0 Umf brings ``ar1_t95`` back; called
+    again on the same archive it waits (the archive lacks the round's runs), and on the archive taken after the
+    round it adds nothing (the round's runs are on their way); a later plan at 2.3 narrows the series' exclusion."""
     root, path, stage2, stage3 = composed
     study = tmp_path / "studies" / "stage3.toml"
     study.parent.mkdir()
@@ -126,25 +160,34 @@ def test_the_round_tool_appends_once_and_refuses_a_round_an_exclude_would_drop(c
     (archive / "study.json").write_text("{}")
     sys.path.insert(0, str(TOOLS))
     import stage3_round as tool
-    hour = 3600.0
-    tables = {("ar1_t95", 2.0): {"from": 0, "replicas": 6, "cost": hour, "why": ["t95 finding"]},
-              ("ar1", 1.7): {"from": 2, "replicas": 30, "cost": hour, "why": ["costly finding"]}}
-    monkeypatch.setattr(tool, "report_records", lambda archive, rebuild: ([], []))
-    monkeypatch.setattr(tool, "plan_tables", lambda rows, findings, addable: (dict(tables), [], []))
+    done = {("ar1", 2.0), ("ar1", 2.3), ("ar1", 1.7)}
+    findings = [_finding("t95", "ar1", 2.0, 8, 2, 3600.0), _finding("whole", "ar1", 1.7, 30, 2, 3600.0)]
+    records = {"rows": _archived(load_study(study, tmp_path / "a"), done), "findings": findings}
+    monkeypatch.setattr(tool, "report_records", lambda archive, rebuild: (records["rows"], records["findings"]))
     args = [str(archive), "--study", str(study), "--stage2", str(STAGE2), "--json"]
+    last = lambda: json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert tool.main(args) == 0
-    said = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-    assert said["round"] == 1 and [e["family"] for e in said["chosen"]] == ["ar1_t95"]
+    said = last()
+    assert said["round"] == 1 and [(e["family"], e["from"], e["replicas"]) for e in said["chosen"]] == [
+        ("ar1_t95", 0, 6)]
+    assert said["chosen"][0]["core_hours"] == pytest.approx(6.0)  # priced at ar1's whole runs there
     assert [e["family"] for e in said["left"]] == ["ar1"] and "28 core-hours" in said["left"][0]["left"]
     text = study.read_text()
     assert text.startswith(path.read_text()) and "# stage 3, round 1\n" in text
-    assert Counter(r.family for r in load_study(study, tmp_path / "out").runs)["ar1_t95"] == 6
-    # a second call before the archive holds the round's runs adds nothing
+    planned = Counter((r.family, r.point["gas.u_over_umf"]) for r in load_study(study, tmp_path / "b").runs)
+    assert planned[("ar1_t95", 2.0)] == 6 and sum(n for (f, _), n in planned.items() if f == "ar1_t95") == 6
+    # the same archive again: it lacks the round's runs, so the tool waits and writes nothing
     assert tool.main(args) == 0
-    assert study.read_text() == text and json.loads(capsys.readouterr().out.strip().splitlines()[-1])["written"] == []
-    # a later round asking the series at a velocity its first round excluded: refused, nothing written
-    tables[("ar1_t95", 2.9)] = {"from": 0, "replicas": 4, "cost": hour, "why": ["later"]}
-    with pytest.raises(SystemExit) as refused:
-        tool.main(args)
-    assert refused.value.code == 2 and "[[exclude]]" in capsys.readouterr().err
-    assert study.read_text() == text
+    said = last()
+    assert said["written"] == [] and "archive the study again" in said["waiting"][0] and study.read_text() == text
+    # archived after the round: the six are on their way, nothing to add
+    records["rows"] = _archived(load_study(study, tmp_path / "c"), done)
+    assert tool.main(args) == 0
+    assert last()["chosen"] == [] and study.read_text() == text
+    # a later plan asks the series at 2.3, where round 1 excluded it: the exclusion narrowed, the runs added
+    records["findings"] = [_finding("t95", "ar1", 2.3, 6, 2, 3600.0)]
+    assert tool.main(args) == 0
+    said = last()
+    assert said["round"] == 2 and [(e["family"], e["u_over_umf"]) for e in said["chosen"]] == [("ar1_t95", 2.3)]
+    after = Counter((r.family, r.point["gas.u_over_umf"]) for r in load_study(study, tmp_path / "d").runs)
+    assert after - planned == Counter({("ar1_t95", 2.3): 4}) and not planned - after

@@ -3,8 +3,9 @@ and the ``[[points]]`` tables of all the open findings' plans (``plan_points``: 
 the cheapest family that counts where it is needed."""
 from __future__ import annotations
 
-from .families import EXPANSION, T95_ONLY, TALL, expansion_runs, row_on_the_way, t95_runs, tall_columns
+from .families import EXPANSION, T95_ONLY, TALL, expansion_runs, row_ended, row_on_the_way, t95_runs, tall_columns
 from .spread import core_hours
+from .table import WINDOW, WINDOW_START
 
 
 # the runs a finding's plan adds (``plan_record``'s ``kind``, ``plan_points``): of the t95 findings (whole runs,
@@ -21,6 +22,37 @@ def plan_record(plan: list, runs: list, kind: str) -> dict:
     return {"kind": kind, "core_hours": hours, "runs": [
         {"family": family, "u_over_umf": v, "replicas": n, "now": count, "cpu_seconds": cost}
         for n, (family, v, count, cost) in zip(plan, runs)]}
+
+
+# s: a "<family>_expansion" run's length (its [[durations]]): the 1 s inlet ramp, then the expansion's window
+EXPANSION_SECONDS = 1.0 + WINDOW_START + WINDOW
+
+
+def _whole_runs(rows, family: str, v) -> list:
+    """The ended runs of ``family`` itself (not a series counted as it) at U/Umf ``v`` that hold their CPU seconds."""
+    return [r for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v and row_ended(r)
+            and r.get("cpu_seconds") and r.get("simulated_seconds")]
+
+
+def _priced(rows, family: str, v, kind: str, cost, runs_there: int):
+    """A replica's CPU seconds for a table of ``family`` at ``v`` that a plan of ``kind`` asks (``cost``: the
+    plan's own, at the runs its finding counts): the plan's where it is of runs like the table's;
+    the base family's whole runs there where the table's family has none yet (stage 3, rule 3: an expansion run at
+    its ``EXPANSION_SECONDS`` share of one, a t95 run at a whole run's cost, an upper bound) or where an expansion
+    plan's replicas are whole runs (the study runs no expansion series there)."""
+    cut_short = family.endswith(EXPANSION)
+    if kind == EXPANSION_KIND and not cut_short:
+        whole = _whole_runs(rows, family, v)
+        return sum(r["cpu_seconds"] for r in whole) / len(whole) if whole else None
+    if cost is not None or runs_there:
+        return cost
+    series = next((family[:-len(s)] for s in (T95_ONLY, EXPANSION) if family.endswith(s)), family)
+    whole = _whole_runs(rows, series, v)  # "<name>_tall_t95" at "<name>_tall"'s, the taller column's
+    if not whole:
+        return None
+    if cut_short:
+        return EXPANSION_SECONDS * sum(r["cpu_seconds"] / r["simulated_seconds"] for r in whole) / len(whole)
+    return sum(r["cpu_seconds"] for r in whole) / len(whole)
 
 
 def _cheaper(kind: str) -> tuple:
@@ -98,8 +130,9 @@ def plan_tables(rows, findings, addable=()) -> tuple[dict, list, list]:
                         queued.append(said)
                     continue
                 family = _plan_family(base, v, plan["kind"], present) or base
+                cost = _priced(rows, family, v, plan["kind"], run["cpu_seconds"], present.get((family, v), 0))
                 table = tables.setdefault((family, v), {"from": present.get((family, v), 0), "replicas": 0,
-                                                        "cost": run["cpu_seconds"], "why": []})
+                                                        "cost": cost, "why": []})
                 table["replicas"] = max(table["replicas"], table["from"] + add)
                 table["why"].append(said + ("" if (family, v) in present else
                                             f"; {family} does not run at {v:g} Umf in the study: an [[exclude]] "

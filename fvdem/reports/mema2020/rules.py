@@ -17,30 +17,16 @@ from .spread import (CLOSE, SPREAD, critical, degrees_of_freedom, difference_err
 from .table import DENSE, WINDOW, WINDOW_START
 
 
-# s: a "<family>_expansion" run's length (its [[durations]]): the 1 s inlet ramp, then the window of the expansion
-EXPANSION_SECONDS = 1.0 + WINDOW_START + WINDOW
-
-
 def replica_cost(rows, family: str, v, column: str | None = None) -> float | None:
     """A replica's CPU seconds at a point so far: the mean ``cpu_seconds`` of the runs of ``family`` at U/Umf ``v``
     that reached their end (of those whose own family, ``column``, is ``column`` alone where given: the runs cut
     short of ``expansion_runs``; without it, of the runs that ended when they mixed alone where the point has some,
-    ``t95_runs``: the replicas a t95 finding's plan adds are of those); None without one. Where ``column`` has no
-    ended run there yet, its replica is priced at ``family``'s own whole runs there: their CPU seconds per simulated
-    second over ``EXPANSION_SECONDS`` (stage 3's composition, rule 3: a cut-short series' first replicas priced
-    at its base family's runs; a t95 series' at a whole run's cost, as above without ``column``)."""
-    def ended(own):
-        return [r for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v and row_ended(r)
-                and r.get("cpu_seconds") and own(r.get("column"))]
-    runs = ended(lambda c: column is None or c == column)
-    cut = [r for r in runs if r.get("cut_at_t95")]
-    cpu = [r["cpu_seconds"] for r in (cut if column is None and cut else runs)]
-    if cpu:
-        return sum(cpu) / len(cpu)
-    whole = [r for r in ended(lambda c: c is None or c == family) if r.get("simulated_seconds")]
-    if column is None or not whole:
-        return None
-    return EXPANSION_SECONDS * sum(r["cpu_seconds"] / r["simulated_seconds"] for r in whole) / len(whole)
+    ``t95_runs``: the replicas a t95 finding's plan adds are of those); None without one."""
+    ended = [r for r in rows if r["family"] == family and r.get("gas.u_over_umf") == v and row_ended(r)
+             and r.get("cpu_seconds") and (column is None or r.get("column") == column)]
+    cut = [r for r in ended if r.get("cut_at_t95")]
+    cpu = [r["cpu_seconds"] for r in (cut if column is None and cut else ended)]
+    return sum(cpu) / len(cpu) if cpu else None
 
 
 def _untold(v, a: list, b: list, gap: float, pair: str, names: tuple, alike: bool = True, how: str = "[[points]]",

@@ -19,6 +19,7 @@ alone:
 from __future__ import annotations
 
 import copy
+import re
 from pathlib import PurePosixPath
 
 import tomli_w
@@ -33,6 +34,18 @@ UMF_WITHIN = 0.05  # the Umf rule: within this of the experiment, the study retu
 REPLICAS = 2  # a changed shape's replicas a point (stage 2's)
 NEW_BED = "_stage3"  # a changed shape's beds: stage 2's names with this (their runs are new runs, never adopted)
 CONFIRM_REPLICAS = 3  # a factor's runs a level in its confirmation at new contact settings
+
+
+def study_toml(table: dict) -> str:
+    """A study table as TOML whose ``[[points]]``, ``[[exclude]]`` and ``[[durations]]`` (each list of tables) are
+    written as arrays of tables, so that a round can append more of them (``round_toml``): tomli_w writes a short
+    list of tables as an inline array, which TOML forbids to extend."""
+    arrays = {k: v for k, v in table.items() if isinstance(v, list) and v and all(isinstance(e, dict) for e in v)}
+    text = tomli_w.dumps({k: v for k, v in table.items() if k not in arrays}).rstrip("\n")
+    for key, entries in arrays.items():
+        for entry in entries:
+            text += f"\n\n[[{key}]]\n" + tomli_w.dumps(entry).rstrip("\n")
+    return text + "\n"
 
 
 def shape_of_case(path: str) -> str | None:
@@ -187,10 +200,13 @@ def series_base(name: str) -> str | None:
 
 
 def addable_series(stage2: dict, stage3: dict) -> list:
-    """The replica series of stage 2 that stage 3's file lacks while it runs their base family (a changed shape's:
-    ``compose_stage3`` leaves them to the rounds)."""
+    """The replica series of stage 2 that rounds may add to stage 3's file: those of a changed shape (its base family's
+    bed renamed ``NEW_BED``), which ``compose_stage3`` leaves to the rounds, whether a round has brought them back or
+    not (a later round may ask one at another velocity)."""
+    families = stage3.get("families", {})
     return sorted(name for name in stage2.get("families", {})
-                  if series_base(name) in stage3.get("families", {}) and name not in stage3["families"])
+                  if series_base(name) in families
+                  and families[series_base(name)].get("bed") != stage2["families"][series_base(name)].get("bed"))
 
 
 def _delta(old: dict, new: dict) -> dict:
@@ -201,9 +217,10 @@ def _delta(old: dict, new: dict) -> dict:
 def series_tables(stage2: dict, stage3: dict, name: str, velocities: list) -> dict:
     """What stage 3's file needs to run stage 2's replica series ``name`` at ``velocities`` alone: its family with
     the changes stage 3 made to its base family's settings (``set``) and beds (renamed ``NEW_BED`` with the changes
-    made to the base's bed), that bed where the file lacks it, stage 2's ``[[durations]]`` naming it, and an
-    ``[[exclude]]`` of the file's other velocities (``{"families": {...}, "beds": {...}, "durations": [...],
-    "exclude": [...]}``). Its replicas come from the round's ``[[points]]``."""
+    made to the base's bed), that bed where the file lacks it, the ``[[durations]]`` of its base family in stage 3's
+    file and then its own of stage 2 (the last that matches decides: an expansion series' 5 s), and the velocities
+    of the file's axis it does not run at (``{"families": {...}, "beds": {...}, "durations": [...], "exclude": [...]}``,
+    ``exclude`` a list of U/Umf). Its replicas come from the round's ``[[points]]``."""
     base = series_base(name)
     old_base, new_base = stage2["families"][base], stage3["families"][base]
     family = copy.deepcopy(stage2["families"][name])
@@ -218,27 +235,60 @@ def series_tables(stage2: dict, stage3: dict, name: str, velocities: list) -> di
             bed = copy.deepcopy(stage2["beds"][family["bed"]])
             beds[renamed] = {**bed, "set": {**bed.get("set", {}), **change}}
         family["bed"] = renamed
-    durations = [_with_families(copy.deepcopy(d), [name]) for d in stage2.get("durations", [])
-                 if name in _families(d)]
+    durations = ([_with_families(copy.deepcopy(d), [name]) for d in stage3.get("durations", [])
+                  if base in _families(d)]
+                 + [_with_families(copy.deepcopy(d), [name]) for d in stage2.get("durations", [])
+                    if name in _families(d)])
     axis = list(stage3.get("axes", {}).get("gas.u_over_umf", []))
-    others = [v for v in axis if v not in velocities]
-    exclude = [{"family": name, "gas.u_over_umf": others}] if others else []
-    return {"families": {name: family}, "beds": beds, "durations": durations, "exclude": exclude}
+    return {"families": {name: family}, "beds": beds, "durations": durations,
+            "exclude": [v for v in axis if v not in velocities]}
+
+
+_EXCLUDE_HEAD = "[[exclude]]  # {name}: the velocities no round has asked it at (a later round narrows this list)"
+
+
+def _exclude_block(name: str, velocities: list) -> str:
+    """A series' own ``[[exclude]]`` as a round writes it (``narrow_exclude`` finds it again)."""
+    return (_EXCLUDE_HEAD.format(name=name) + f'\nfamily = "{name}"\n"gas.u_over_umf" = '
+            + "[" + ", ".join(repr(float(v)) for v in velocities) + "]")
+
+
+def narrow_exclude(text: str, name: str, velocities: list) -> str | None:
+    """``text`` (stage 3's file) with the velocities ``velocities`` taken out of the ``[[exclude]]`` an earlier round
+    wrote for the series ``name`` (the block left as a comment once its list is empty); None where the file holds no
+    such block (an exclusion written otherwise is not the rounds' to change)."""
+    pattern = re.compile(re.escape(_EXCLUDE_HEAD.format(name=name)) + r'\nfamily = "' + re.escape(name)
+                         + r'"\n"gas\.u_over_umf" = \[([^\]\n]*)\]')
+    found = pattern.search(text)
+    if found is None:
+        return None
+    kept = [float(v) for v in found.group(1).split(",") if v.strip() and float(v) not in velocities]
+    block = (_exclude_block(name, kept) if kept
+             else f"# {name}: runs at every velocity of the axis (its [[exclude]] emptied by the rounds)")
+    return text[:found.start()] + block + text[found.end():]
 
 
 def round_toml(chosen: list, stage2: dict, stage3: dict, number: int, said: list) -> str:
     """Round ``number``'s text to append to stage 3's file: a head (``ROUND_MARK``, then ``said``'s lines), the
-    tables a replica series new to the file needs (``series_tables``, at the velocities the round asks of it), and
-    each chosen table (``round_tables``) as a ``[[points]]`` table with the findings that ask it and its cost."""
+    tables a replica series new to the file needs (``series_tables``, at the velocities the round asks of it; a bed
+    two series share written once), and each chosen table (``round_tables``) as a ``[[points]]`` table with the
+    findings that ask it and its cost. A series the file holds already, asked at a velocity an earlier round
+    excluded, needs that exclusion narrowed too (``narrow_exclude``)."""
     lines = ["", f"{ROUND_MARK}{number}"] + [f"# {line}" for line in said]
     new = {}
     for entry in chosen:
         if entry["family"] not in stage3.get("families", {}):
             new.setdefault(entry["family"], []).append(entry["u_over_umf"])
+    beds = dict(stage3.get("beds", {}))
     for name, velocities in sorted(new.items()):
-        tables = series_tables(stage2, stage3, name, velocities)
+        tables = series_tables(stage2, {**stage3, "beds": beds}, name, velocities)
+        beds.update(tables["beds"])
         lines.append(f"# {name}: stage 2's replica series of {series_base(name)}, at this round's points alone")
-        lines.append(tomli_w.dumps({k: v for k, v in tables.items() if v}).rstrip("\n"))
+        lines.append(tomli_w.dumps({k: tables[k] for k in ("families", "beds") if tables[k]}).rstrip("\n"))
+        if tables["durations"]:
+            lines.append(study_toml({"durations": tables["durations"]}).rstrip("\n"))
+        if tables["exclude"]:
+            lines += ["", _exclude_block(name, tables["exclude"])]
     for entry in chosen:
         lines += [""] + [f"# {why}" for why in entry["why"]]
         lines += [f"# {entry['more']} more, about {entry['core_hours']:.3g} core-hours", "[[points]]",
