@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The bed-dynamics campaign (issue 66), resumable: two studies side by side, one run at a time each, one numba
-# thread a run (more threads than free cores stall OpenMP: docs/benchmarks.md):
+# The bed-dynamics campaign (issue 66), resumable: two studies side by side, one run at a time each (the queue's two
+# at a time once the contact study has ended), one numba thread a run (more threads than free cores stall OpenMP:
+# docs/benchmarks.md):
 #   - studies/contact_paper.toml: AR-1 and AR-4 MP at 2.0 Umf at the paper's contact stiffness and steps
 #     (three replicas each; about 1.3 and 2.5 core-hours a run);
 #   - studies/stochastic_bed.toml (issue 68: the stochastic drag force in the AR-1 bed, three runs of about 0.4
@@ -50,15 +51,30 @@ study() {  # study NAME [ARGS]: one study, restored from its archive where one i
     local name=$1; shift
     local restore=()
     [ -f "docs/data/$name/study.json" ] && restore=(--restore "docs/data/$name")
-    .venv/bin/fvdem study "studies/$name.toml" --out "$OUT/$name" --workers 1 "${restore[@]}" "$@"
+    .venv/bin/fvdem study "studies/$name.toml" --out "$OUT/$name" --workers "${WORKERS:-1}" "${restore[@]}" "$@"
 }
 
-study contact_paper "$@" &
-contact=$!
+ended() {  # ended NAME: whether every run of a study has ended (its folder, else its committed archive)
+    local where="$OUT/$1"
+    [ -f "$where/study.json" ] || where="docs/data/$1"
+    [ -f "$where/study.json" ] || return 1
+    .venv/bin/fvdem study "$where" --status --json 2>/dev/null | .venv/bin/python -c 'import json, sys
+lines = sys.stdin.read().strip().splitlines()
+sys.exit(0 if lines and json.loads(lines[-1])["left_simulated_seconds"] == 0 else 1)'
+}
+
+# Once the contact study has ended, the queue below takes both cores (two runs at a time).
 status=0
+if ended contact_paper; then
+    export WORKERS=2
+    contact=
+else
+    study contact_paper "$@" &
+    contact=$!
+fi
 [ -f studies/stochastic_bed.toml ] && { study stochastic_bed "$@" || status=$?; }
 study screening_ar1 "$@" || status=$?
 [ -f studies/contact_candidates.toml ] && { study contact_candidates "$@" || status=$?; }
 [ -f studies/screening_ar4.toml ] && { study screening_ar4 "$@" || status=$?; }
-wait $contact || status=$?
+[ -n "$contact" ] && { wait $contact || status=$?; }
 exit $status
