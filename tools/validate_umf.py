@@ -415,7 +415,7 @@ def _combined_plot(path, outputs, results=None):
     The ramps are saved outputs of this tool (their last lines) or ``results`` themselves."""
     from fvdem.analysis.plots import _pyplot, _save
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = plt.subplots(figsize=(7.5, 4.5 + 0.16 * len(results or outputs)))
     if results is None:
         results = [json.loads(Path(name).read_text().strip().splitlines()[-1]) for name in outputs]
     for r in results:
@@ -426,7 +426,9 @@ def _combined_plot(path, outputs, results=None):
         found = r["umf_simulated"] is not None
         label = (f"{shape}, {r['drag']}, {r['bed'].split(' particles')[0]} in {width} ({r['settings']}): "
                  + (f"Umf {r['umf_simulated']:.2f} m/s ({r['relative_error']:+.0%})" if found else "no Umf found")
-                 + (f", rising from a {r['preparation']} bed" if r.get("direction") == "rising" else ""))
+                 + (f", rising from a {r['preparation']} bed" if r.get("direction") == "rising" else "")
+                 + (f"; W/A at {r['umf_at_weight']:.2f}" if r.get("direction") == "rising"
+                    and r.get("umf_at_weight") is not None else ""))
         line, = ax.plot(u, [c["over_weight"] for c in r["curve"]], "o-", ms=3, label=label)
         if found:
             ax.axvline(r["umf_simulated"] / exp, color=line.get_color(), ls=":", lw=1)
@@ -443,7 +445,7 @@ def _combined_plot(path, outputs, results=None):
                  "(a falling ramp's end, a rising ramp's start)",
                  fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6.5, loc="lower right")
+    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.14))  # below the axes: long labels
     return _save(fig, path)
 
 
