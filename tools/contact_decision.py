@@ -132,8 +132,9 @@ def main(argv=None) -> int:
     result["candidates"] = contact_candidates(rows, args.velocity)
     if not args.json:
         for shape, entry in result["shapes"].items():
-            print(f"{shape}: {entry['verdict']}; t95 {entry['t95']['paper']} (paper's settings) against "
-                  f"{entry['t95']['defaults']} (defaults), {entry['t95']['order']}")
+            print(f"{shape}: {entry['verdict']}" + (f" ({entry['why']})" if entry.get("why") else "")
+                  + f"; t95 {entry['t95']['paper']} (paper's settings) against {entry['t95']['defaults']} "
+                  f"(defaults), {entry['t95']['order']}")
             chosen = result["candidates"]["shapes"][shape]
             for family, c in chosen["candidates"].items():
                 print(f"  {family}: {c['verdict']}; t95 {c['t95']['candidate']} ({c['t95']['runs']} runs), "

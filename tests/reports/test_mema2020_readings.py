@@ -149,6 +149,12 @@ def test_the_contact_settings_rule_tells_differ_agree_or_open():
     assert result["shapes"]["AR-4 MP"]["t95"]["order"] == "lower" and result["shapes"]["AR-1"]["t95"]["runs"] == [3, 8]
     unmixed = rows + _rows("ar1_paper", 2.0, t95=[None], window=[0.7], ends=[8.0])
     assert readings.contact_settings(unmixed)["shapes"]["AR-1"]["verdict"] == "open"
+    # fewer than the three runs at the paper's settings: open, the reading so far said
+    one = shape("ar4_mp_t95", "ar4_mp_paper", same, [3.0], [0.76] * 4 + [0.75] * 4, [0.85])
+    entry = readings.contact_settings(one)["shapes"]["AR-4 MP"]
+    assert readings.PAPER_RUNS == 3 and entry["verdict"] == "open" and entry["reading"] == "differ"
+    assert "1 of the at least 3 runs" in entry["why"]
+    assert readings.contact_candidates(one)["shapes"]["AR-4 MP"]["choice"] is None
 
 
 def test_the_contact_candidates_rule_chooses_the_cheapest_that_reproduces_the_papers_change():
