@@ -104,6 +104,15 @@ def t95_runs(rows) -> list:
             for r in rows]
 
 
+def series_base(name: str) -> str | None:
+    """The family a replica series "<family>_t95" (``T95_ONLY``) or "<family>_expansion" (``EXPANSION``) counts as,
+    or None for another name."""
+    for suffix in (T95_ONLY, EXPANSION):
+        if name.endswith(suffix):
+            return name[:-len(suffix)]
+    return None
+
+
 def _counted_as_base(row: dict, suffix: str) -> dict:
     """A run of family "<name><suffix>" (``TALL``, ``EXPANSION``, ``T95_ONLY``) as <name>'s, its own family kept
     as ``column``."""

@@ -3,7 +3,8 @@ and the ``[[points]]`` tables of all the open findings' plans (``plan_points``: 
 the cheapest family that counts where it is needed."""
 from __future__ import annotations
 
-from .families import EXPANSION, T95_ONLY, TALL, expansion_runs, row_ended, row_on_the_way, t95_runs, tall_columns
+from .families import (EXPANSION, T95_ONLY, TALL, expansion_runs, row_ended, row_on_the_way, series_base,
+                       t95_runs, tall_columns)
 from .spread import core_hours
 from .table import WINDOW, WINDOW_START
 
@@ -46,8 +47,7 @@ def _priced(rows, family: str, v, kind: str, cost, runs_there: int):
         return sum(r["cpu_seconds"] for r in whole) / len(whole) if whole else None
     if cost is not None or runs_there:
         return cost
-    series = next((family[:-len(s)] for s in (T95_ONLY, EXPANSION) if family.endswith(s)), family)
-    whole = _whole_runs(rows, series, v)  # "<name>_tall_t95" at "<name>_tall"'s, the taller column's
+    whole = _whole_runs(rows, series_base(family) or family, v)  # "<name>_tall_t95" at "<name>_tall"'s
     if not whole:
         return None
     if cut_short:
@@ -106,7 +106,7 @@ def plan_tables(rows, findings, addable=()) -> tuple[dict, list, list]:
         key = (r["family"], r.get("gas.u_over_umf"))
         present[key] = max(present.get(key, 0) + 1, r.get("replica") or 0)
     for name in addable:
-        base = name[:-len(T95_ONLY)] if name.endswith(T95_ONLY) else name[:-len(EXPANSION)]
+        base = series_base(name)
         for family, v in list(present):
             if family == base:
                 present.setdefault((name, v), 0)

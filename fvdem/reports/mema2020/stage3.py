@@ -24,7 +24,7 @@ from pathlib import PurePosixPath
 
 import tomli_w
 
-from .families import EXPANSION, T95_ONLY
+from .families import series_base
 
 CONTACT_KEYS = ("contact.normal_stiffness", "time.dem_step", "gas.cfd_step")  # the contact settings' choice
 SHAPE_CASES = {"AR-1": {"ar1.toml", "bed_ar1.toml"},
@@ -92,7 +92,7 @@ def compose_stage3(stage2: dict, changes: dict) -> dict:
     for name, family in stage2["families"].items():
         shape = shape_of_case(family["case"])
         if shape in changed:
-            if name.endswith(T95_ONLY) or name.endswith(EXPANSION):
+            if series_base(name) is not None:
                 continue  # a replica series: the plan's rounds bring it back
             family = {**family, "set": {**family.get("set", {}), **changes[shape].get("set", {})},
                       "bed": family["bed"] + NEW_BED}
@@ -189,14 +189,6 @@ def round_tables(tables: dict, hours: float = ROUND_HOURS) -> tuple[list, list]:
     chosen.sort(key=lambda e: (e["core_hours"], e["family"], e["u_over_umf"]))
     left.sort(key=lambda e: (e["family"], e["u_over_umf"]))
     return chosen, left
-
-
-def series_base(name: str) -> str | None:
-    """The family a replica series "<family>_t95" or "<family>_expansion" counts as, or None for another name."""
-    for suffix in (T95_ONLY, EXPANSION):
-        if name.endswith(suffix):
-            return name[:-len(suffix)]
-    return None
 
 
 def addable_series(stage2: dict, stage3: dict) -> list:
