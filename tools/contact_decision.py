@@ -45,18 +45,31 @@ def study_archives(given, defaults, parser, option: str = "--archives") -> list:
     return archives
 
 
+def report_json(archive: Path, names: list, rebuild: bool = True) -> list:
+    """The JSON files ``names`` of an archive's report (rebuilt in a scratch copy, else as committed), each parsed,
+    None where the report has no such file."""
+    def read(folder: Path) -> list:
+        return [json.loads((folder / name).read_text()) if (folder / name).is_file() else None for name in names]
+    if not rebuild:
+        return read(archive)
+    with tempfile.TemporaryDirectory() as scratch:
+        copy = Path(scratch) / archive.name
+        shutil.copytree(archive, copy)
+        report(copy)
+        return read(copy)
+
+
+def planned_rows(archive: Path, rows: list) -> list:
+    """An archive's table rows of the runs it plans, each with its ``gas.u_over_umf`` (``with_velocity``)."""
+    if rows is None:
+        raise FileNotFoundError(archive / "table.json")
+    return [with_velocity(archive, r) for r in rows if r["status"] != "not planned"]
+
+
 def table_rows(archive: Path, rebuild: bool = True) -> list:
     """The table rows of an archive (its report rebuilt in a scratch copy, else its committed table), the runs it
     plans, each with its ``gas.u_over_umf`` (``with_velocity``)."""
-    if not rebuild:
-        rows = json.loads((archive / "table.json").read_text())
-    else:
-        with tempfile.TemporaryDirectory() as scratch:
-            copy = Path(scratch) / archive.name
-            shutil.copytree(archive, copy)
-            report(copy)
-            rows = json.loads((copy / "table.json").read_text())
-    return [with_velocity(archive, r) for r in rows if r["status"] != "not planned"]
+    return planned_rows(archive, report_json(archive, ["table.json"], rebuild)[0])
 
 
 def with_velocity(archive: Path, row: dict) -> dict:

@@ -16,13 +16,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
-import tempfile
 from pathlib import Path
 
-from contact_decision import study_archives  # tools/, beside this script
+from contact_decision import report_json, study_archives  # tools/, beside this script
 from fvdem.reports.mema2020.decisions import screening_decision
-from fvdem.study import report
 from fvdem.study.screening import SCREENING_FILE
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,15 +29,7 @@ ARCHIVES = tuple(ROOT / "docs" / "data" / name for name in ("screening_ar1", "sc
 def screening_record(archive: Path, rebuild: bool = True) -> dict | None:
     """An archive's screening record (its report rebuilt in a scratch copy, else its committed one); None where
     the archive holds none (not a designed study, or no report yet)."""
-    if not rebuild:
-        path = archive / SCREENING_FILE
-        return json.loads(path.read_text()) if path.is_file() else None
-    with tempfile.TemporaryDirectory() as scratch:
-        copy = Path(scratch) / archive.name
-        shutil.copytree(archive, copy)
-        report(copy)
-        path = copy / SCREENING_FILE
-        return json.loads(path.read_text()) if path.is_file() else None
+    return report_json(archive, [SCREENING_FILE], rebuild)[0]
 
 
 def _interval(entry: dict) -> str:

@@ -23,19 +23,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import shutil
 import tempfile
 import tomllib
 from collections import Counter
 from pathlib import Path
 
-from contact_decision import study_archives, with_velocity  # tools/, beside this script
+from contact_decision import planned_rows, report_json, study_archives  # tools/, beside this script
 from fvdem.reports.mema2020.families import row_ended
 from fvdem.reports.mema2020.plan import plan_tables
 from fvdem.reports.mema2020.stage3 import (ROUND_HOURS, ROUND_MARK, addable_series, narrow_exclude, round_tables,
                                            round_toml)
 from fvdem.errors import CaseError
-from fvdem.study import report
 from fvdem.study.sweep import study_from_table
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,17 +45,8 @@ ARCHIVE = ROOT / "docs" / "data" / "mema2020_stage3"
 def report_records(archive: Path, rebuild: bool = True) -> tuple[list, list]:
     """An archive's table rows of the runs it plans (each with its ``gas.u_over_umf``) and its findings, from its
     report rebuilt in a scratch copy, else from its committed files."""
-    def read(folder: Path):
-        rows = json.loads((folder / "table.json").read_text())
-        findings = json.loads((folder / "findings.json").read_text())
-        return [with_velocity(archive, r) for r in rows if r["status"] != "not planned"], findings
-    if not rebuild:
-        return read(archive)
-    with tempfile.TemporaryDirectory() as scratch:
-        copy = Path(scratch) / archive.name
-        shutil.copytree(archive, copy)
-        report(copy)
-        return read(copy)
+    rows, findings = report_json(archive, ["table.json", "findings.json"], rebuild)
+    return planned_rows(archive, rows), findings
 
 
 def planned(text: str, path: Path, scratch: Path) -> tuple[Counter, set]:
@@ -65,6 +54,15 @@ def planned(text: str, path: Path, scratch: Path) -> tuple[Counter, set]:
     U/Umf), as the study engine expands it, and their names."""
     study = study_from_table(tomllib.loads(text), path, scratch)
     return Counter((r.family, r.point.get("gas.u_over_umf")) for r in study.runs), {r.name for r in study.runs}
+
+
+def waits(waiting: list, quiet: bool) -> int:
+    """Says what the round waits for (each line unless ``quiet``, then the JSON object) and writes nothing: 0."""
+    if not quiet:
+        for line in waiting:
+            print(f"waits: {line}")
+    print(json.dumps({"round": None, "waiting": waiting, "chosen": [], "left": [], "written": []}))
+    return 0
 
 
 def main(argv=None) -> int:
@@ -90,11 +88,7 @@ def main(argv=None) -> int:
     waiting = ([] if args.study.is_file() else [f"{args.study}: stage 3's study file (tools/stage3_study.py)"]) + (
         [] if archives else [f"{ARCHIVE}: stage 3's archive (fvdem study ... --archive)"])
     if waiting:
-        if not args.json:
-            for line in waiting:
-                print(f"waits: {line}")
-        print(json.dumps({"round": None, "waiting": waiting, "chosen": [], "left": [], "written": []}))
-        return 0
+        return waits(waiting, args.json)
     archive = archives[0]
     if not (archive / "table.json").exists() and args.quick:
         parser.exit(2, f"archive: {archive}: no table.json (its report not written; leave out --quick)\n")
@@ -105,12 +99,8 @@ def main(argv=None) -> int:
         before, names = planned(text, args.study, Path(scratch) / "before")
         behind = names - {r["name"] for r in rows}
         if behind:  # its plan would not see the runs the file's last round added: they would be asked again
-            waiting = [f"{archive}: archived before the study file's last round ({len(behind)} of its runs not in "
-                       "the archive's table): archive the study again (fvdem study DIR --archive)"]
-            if not args.json:
-                print(f"waits: {waiting[0]}")
-            print(json.dumps({"round": None, "waiting": waiting, "chosen": [], "left": [], "written": []}))
-            return 0
+            return waits([f"{archive}: archived before the study file's last round ({len(behind)} of its runs not "
+                          "in the archive's table): archive the study again (fvdem study DIR --archive)"], args.json)
         tables, _, _ = plan_tables(rows, findings, addable_series(stage2, stage3))
         chosen, left = round_tables(tables, args.hours)
         chosen = [e for e in chosen if before[(e["family"], e["u_over_umf"])] < e["replicas"]]

@@ -22,7 +22,6 @@ import json
 import tomllib
 from pathlib import Path
 
-
 from contact_decision import ARCHIVES as CONTACT_ARCHIVES, study_archives, table_rows  # tools/, beside this script
 from screening_decision import ARCHIVES as SCREENING_ARCHIVES, screening_record
 from fvdem.analysis.plots import read_timeseries
